@@ -1,0 +1,151 @@
+"""Physical and rule parameters of the simulation, as frozen dataclasses with named presets.
+
+Units are in brackets on every field. Two kart presets exist:
+
+* ``paper``: the figures the paper states (15 m/s, +4 / -6 m/s^2, 1.5 g).
+* ``original``: the Unity implementation's figures (``../shared/spec/original_implementation.md`` section 3):
+  acceleration 12 and braking 10 m/s^2 multiplied by a curve that is 2.5x at standstill and 1x at top
+  speed, lateral grip 2.0 g fresh falling to 0.5 g worn.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+SIM_HZ = 50  # [Hz] fixed simulation rate, the same live and headless
+DT = 1.0 / SIM_HZ  # [s] fixed simulation step
+GRAVITY = 9.81  # [m/s^2]
+
+
+@dataclass(frozen=True)
+class KartParams:
+    """Kinematic-bicycle kart with a lateral-acceleration limit that falls as the tyres wear."""
+
+    name: str = "paper"
+    top_speed: float = 15.0  # [m/s]
+    reverse_speed: float = 5.0  # [m/s] top speed backwards
+    acceleration: float = 4.0  # [m/s^2] at full throttle (times the curve below)
+    braking: float = 6.0  # [m/s^2] at full brake (times the curve below)
+    reverse_acceleration: float = 2.0  # [m/s^2] when braking from standstill
+    # Multiplier on acceleration and braking at standstill, falling quadratically in v/top_speed to 1
+    # at top speed (the Unity kart's "AccelerationCurve"); 1.0 means constant limits.
+    low_speed_gain: float = 1.0  # [-]
+    coasting_drag: float = 2.0  # [m/s^2] deceleration with no throttle and no brake
+    wheelbase: float = 1.27  # [m]
+    max_steer_angle: float = 0.45  # [rad] front wheel angle at steer input 1 (about 26 deg)
+    lateral_g_fresh: float = 1.5  # [g] lateral limit with new tyres
+    lateral_g_worn: float = 0.5  # [g] lateral limit with fully worn tyres
+    # Wear w = min(1, wear_gain * (1 - exp(-A / wear_yaw_scale))) with A the accumulated |yaw| [rad].
+    wear_yaw_scale: float = 200.0  # [rad]
+    wear_gain: float = 4.0 / 3.0  # [-]
+    body_half_length: float = 0.55  # [m] half length of the capsule's axis (body length 2.0 m)
+    body_radius: float = 0.45  # [m] capsule radius (body width 0.9 m)
+    wall_friction: float = 5.0  # [m/s^2] speed lost while sliding along a wall
+
+    def lateral_limit(self, wear: float | np.ndarray) -> float | np.ndarray:
+        """Lateral acceleration limit [m/s^2] for a tyre-wear proportion in [0, 1]."""
+        grip_g = self.lateral_g_worn + (1.0 - np.clip(wear, 0.0, 1.0)) * (
+            self.lateral_g_fresh - self.lateral_g_worn
+        )
+        return grip_g * GRAVITY
+
+    def wear_from_yaw(self, accumulated_yaw: float | np.ndarray) -> float | np.ndarray:
+        """Tyre-wear proportion in [0, 1] after ``accumulated_yaw`` [rad] of total turning."""
+        return np.minimum(1.0, self.wear_gain * (1.0 - np.exp(-np.asarray(accumulated_yaw) / self.wear_yaw_scale)))
+
+    def yaw_for_wear(self, wear: float) -> float:
+        """Inverse of :meth:`wear_from_yaw`: accumulated yaw [rad] that gives ``wear`` (< 1)."""
+        if not 0.0 <= wear < 1.0:
+            raise ValueError(f"wear must be in [0, 1), got {wear}")
+        return float(-self.wear_yaw_scale * np.log(1.0 - wear / self.wear_gain))
+
+    def cornering_speed(self, radius: float | np.ndarray, wear: float | np.ndarray) -> float | np.ndarray:
+        """Highest steady speed [m/s] on a circle of ``radius`` [m] at tyre wear ``wear``; top speed if radius <= 0."""
+        radius = np.asarray(radius, dtype=float)
+        v = np.sqrt(self.lateral_limit(wear) * np.abs(radius))
+        return np.where(radius > 0.0, np.minimum(v, self.top_speed), self.top_speed)
+
+    def as_array(self) -> np.ndarray:
+        """Parameters packed for the compiled step kernel (order fixed by :data:`KART_PARAM_FIELDS`)."""
+        return np.array([getattr(self, f) for f in KART_PARAM_FIELDS], dtype=np.float64)
+
+
+KART_PARAM_FIELDS: tuple[str, ...] = (
+    "top_speed",
+    "reverse_speed",
+    "acceleration",
+    "braking",
+    "reverse_acceleration",
+    "low_speed_gain",
+    "coasting_drag",
+    "wheelbase",
+    "max_steer_angle",
+    "lateral_g_fresh",
+    "lateral_g_worn",
+    "wear_yaw_scale",
+    "wear_gain",
+    "body_half_length",
+    "body_radius",
+    "wall_friction",
+)
+
+PAPER_KART = KartParams()
+ORIGINAL_KART = replace(
+    PAPER_KART,
+    name="original",
+    acceleration=12.0,
+    braking=10.0,
+    reverse_acceleration=5.0,
+    low_speed_gain=2.5,
+    lateral_g_fresh=2.0,
+    lateral_g_worn=0.5,
+)
+KART_PRESETS: dict[str, KartParams] = {p.name: p for p in (PAPER_KART, ORIGINAL_KART)}
+
+
+def kart_preset(name: str) -> KartParams:
+    """Look up a kart preset by name (``paper`` or ``original``)."""
+    try:
+        return KART_PRESETS[name]
+    except KeyError:
+        raise ValueError(f"unknown kart preset {name!r}; known: {sorted(KART_PRESETS)}") from None
+
+
+@dataclass(frozen=True)
+class RuleParams:
+    """Racing rules and metric settings of the referee (paper section 3, spec section 4)."""
+
+    time_limit: float = 120.0  # [s] a kart that has not finished by then is DNF
+    lane_change_limit: int | None = None  # [lanes] L; None takes the track's own limit
+    fault_cooldown: float = 1.5  # [s] contact within this time of the last one is the same collision
+    contact_margin: float = 0.02  # [m] bodies closer than this are in contact
+    fault_cone_cos: float = 0.5  # [-] front touches if the contact normal is within acos(0.5) = 60 deg of heading
+    buffer_side: float = 0.5  # [m] s0: minimum nose-to-body distance when not directly behind (eq. 7-8)
+    buffer_behind: float = 1.5  # [m] s1: minimum nose-to-body distance when directly behind (eq. 7-8)
+    behind_lateral_overlap: float = 1.2  # [m] "directly behind" when lateral offsets differ by less than this
+    lane_deadzone: float = 1.3  # [m] delta_r counts max(distance to target lane point - this, 0), as the original
+    start_wear: float = 0.25  # [-] tyre wear of every kart at the start of a race
+
+
+@dataclass(frozen=True)
+class SensorParams:
+    """The 9 range rays of each kart (spec section 6)."""
+
+    angles_deg: tuple[float, ...] = (0.0, 30.0, 45.0, 60.0, 90.0, -30.0, -45.0, -60.0, -90.0)  # [deg] + = right
+    max_range: float = 20.0  # [m]
+    origin_forward: float = 0.1  # [m] sensor origin ahead of the kart centre
+
+    def angles_rad_left_positive(self) -> np.ndarray:
+        """Ray angles [rad] in the counter-clockwise (left-positive) convention used by the kernels."""
+        return -np.deg2rad(np.asarray(self.angles_deg, dtype=np.float64))
+
+
+@dataclass(frozen=True)
+class SimParams:
+    """Everything a :class:`~sim_core.world.World` needs besides the track."""
+
+    kart: KartParams = field(default_factory=lambda: PAPER_KART)
+    rules: RuleParams = field(default_factory=RuleParams)
+    sensors: SensorParams = field(default_factory=SensorParams)
