@@ -1,0 +1,95 @@
+"""A pure-pursuit lane follower: the simplest competent driver, used as a baseline and in tests.
+
+It steers toward a point ``lookahead`` metres ahead on a chosen lateral offset (a lane) and sets its speed
+from the tightest curvature it will meet within its braking distance. Vectorised over a whole batched
+world, so it can drive thousands of races at once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim_core.params import KartParams
+from sim_core.track import Track
+
+
+@dataclass(frozen=True)
+class LaneFollowerParams:
+    """Tuning of :class:`LaneFollower`."""
+
+    lookahead_time: float = 0.45  # [s] lookahead distance = max(min_lookahead, speed * this)
+    min_lookahead: float = 3.0  # [m]
+    speed_gain: float = 1.5  # [1/(m/s)] throttle per m/s of speed error
+    grip_margin: float = 0.9  # [-] fraction of the lateral limit it plans to use
+    preview: float = 40.0  # [m] how far ahead it looks for corners
+
+
+class LaneFollower:
+    """Pure pursuit on a fixed lateral offset with a curvature-limited speed profile."""
+
+    def __init__(self, track: Track, kart: KartParams, params: LaneFollowerParams | None = None) -> None:
+        self.track = track
+        self.kart = kart
+        self.params = params or LaneFollowerParams()
+        s = track.centre_s
+        self._s_ext = np.concatenate([s - track.length, s, s + track.length])
+        self._x_ext = np.tile(track.centre_xy[:, 0], 3)
+        self._y_ext = np.tile(track.centre_xy[:, 1], 3)
+        self._k_ext = np.tile(np.abs(track.centre_curvature), 3)
+        self._kappa_signed = np.tile(track.centre_curvature, 3)
+        self._preview_offsets = np.linspace(0.0, self.params.preview, 41)
+
+    def act(
+        self,
+        positions: np.ndarray,
+        headings: np.ndarray,
+        speeds: np.ndarray,
+        progress: np.ndarray,
+        wear: np.ndarray,
+        lateral_target: np.ndarray | float,
+        speed_cap: np.ndarray | float = np.inf,
+    ) -> np.ndarray:
+        """Actions (..., 2) = [steer, throttle] for karts at ``positions`` (..., 2) etc.
+
+        ``lateral_target`` is the left-positive offset [m] to follow; ``speed_cap`` an optional top speed [m/s].
+        """
+        p = self.params
+        track = self.track
+        lookahead = np.maximum(p.min_lookahead, np.abs(speeds) * p.lookahead_time)
+        s_ahead = progress + lookahead
+        normal_x, normal_y, cx, cy = self._frame(s_ahead)
+        tx = cx + normal_x * lateral_target
+        ty = cy + normal_y * lateral_target
+        dx = tx - positions[..., 0]
+        dy = ty - positions[..., 1]
+        alpha = np.arctan2(dy, dx) - headings
+        alpha = (alpha + np.pi) % (2 * np.pi) - np.pi
+        dist = np.maximum(np.hypot(dx, dy), 1e-3)
+        delta = np.arctan2(2.0 * self.kart.wheelbase * np.sin(alpha), dist)
+        steer = np.clip(delta / self.kart.max_steer_angle, -1.0, 1.0)
+        # speed profile: v(s') limited by the corner at s' and the braking distance to it
+        s_prev = progress[..., None] + self._preview_offsets
+        kappa = np.interp(s_prev % track.length, track.centre_s, np.abs(track.centre_curvature), period=track.length)
+        kappa_signed = np.interp(s_prev % track.length, track.centre_s, track.centre_curvature, period=track.length)
+        # radius of the followed offset: R_offset = R_centre - d * sign(kappa)
+        offset = np.asarray(lateral_target)[..., None] if np.ndim(lateral_target) else lateral_target
+        radius = np.maximum(1.0 / np.maximum(kappa, 1e-6) - offset * np.sign(kappa_signed), 1.0)
+        a_lat = self.kart.lateral_limit(wear)[..., None] * p.grip_margin
+        v_corner = np.sqrt(a_lat * radius)
+        v_allowed = np.sqrt(v_corner**2 + 2.0 * self.kart.braking * p.grip_margin * self._preview_offsets)
+        target = np.minimum(np.min(v_allowed, axis=-1), np.minimum(self.kart.top_speed, speed_cap))
+        throttle = np.clip(p.speed_gain * (target - speeds), -1.0, 1.0)
+        return np.stack([steer, throttle], axis=-1)
+
+    def _frame(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        track = self.track
+        s = np.mod(s, track.length)
+        cx = np.interp(s, self._s_ext, self._x_ext)
+        cy = np.interp(s, self._s_ext, self._y_ext)
+        eps = 0.5
+        fx = np.interp(s + eps, self._s_ext, self._x_ext) - np.interp(s - eps, self._s_ext, self._x_ext)
+        fy = np.interp(s + eps, self._s_ext, self._y_ext) - np.interp(s - eps, self._s_ext, self._y_ext)
+        norm = np.hypot(fx, fy)
+        return -fy / norm, fx / norm, cx, cy

@@ -1,0 +1,44 @@
+"""The racing rules of the paper in one place: the lane-change counter, collision responsibility and the
+safety buffers. Compiled so the referee (and the planners' discrete game) call the very same code."""
+
+from __future__ import annotations
+
+from numba import njit
+
+
+@njit(cache=True)
+def lane_change_update(
+    count: int, previous_lane: int, lane: int, driven_straight: bool, next_straight: bool, limit: int
+) -> tuple[int, bool]:
+    """One checkpoint crossing of the lane-change rule: returns (new counter, illegal).
+
+    eq. (9), with the original implementation's semantics: the counter adds the number of lanes crossed
+    (``|lane - previous_lane|``) since the previous checkpoint and resets to 0 whenever the road type
+    changes (the section just driven is straight and the next one a curve, or the reverse). A change is
+    illegal (eq. 10) when it was made on a straight (``driven_straight``) and takes the counter past
+    ``limit`` (L). Unlike the original, a crossing without a lane change is never illegal (the original
+    charged again at every checkpoint while the counter stayed above L).
+    """
+    crossed = abs(lane - previous_lane)
+    illegal = driven_straight and crossed > 0 and count + crossed > limit
+    if driven_straight != next_straight:
+        return 0, illegal
+    return count + crossed, illegal
+
+
+@njit(cache=True, inline="always")
+def front_touches(contact_param: float, toward_other_dot_heading: float, cone_cos: float) -> bool:
+    """Whether a kart's front touches another: the contact point is on the front half of its body axis
+    (``contact_param`` >= 0.5, 0 = rear end, 1 = front end) and the other kart lies within the frontal cone
+    (the unit direction toward the contact, dotted with the heading, is at least ``cone_cos``).
+
+    This is the paper's responsibility rule: the follower (the kart whose nose runs into the other) is at
+    fault; side-by-side rubbing and being hit from behind are not.
+    """
+    return contact_param >= 0.5 and toward_other_dot_heading >= cone_cos
+
+
+@njit(cache=True, inline="always")
+def required_buffer(directly_behind: bool, buffer_side: float, buffer_behind: float) -> float:
+    """eqs. (7)-(8): the nose-to-body distance a kart must keep: s1 when directly behind the other, else s0."""
+    return buffer_behind if directly_behind else buffer_side

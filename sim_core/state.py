@@ -1,0 +1,77 @@
+"""Layout of the batched world state: named column indices into the packed arrays.
+
+Per kart (arrays of shape (B, K, ...)): floats ``F_*`` in ``fstate`` and integers ``I_*`` in ``istate``.
+Per race (shape (B, ...)): integers ``R_*`` in ``rstate``. Packing keeps one kart's state contiguous and
+lets the whole world be copied, saved and compared as a handful of arrays.
+"""
+
+from __future__ import annotations
+
+# floats per kart
+F_X = 0  # [m]
+F_Y = 1  # [m]
+F_HEADING = 2  # [rad] counter-clockwise from +x, in [-pi, pi)
+F_SPEED = 3  # [m/s] along the heading (negative when reversing)
+F_YAW_RATE = 4  # [rad/s]
+F_ACC_YAW = 5  # [rad] accumulated |yaw|, drives tyre wear
+F_S = 6  # [m] progress along the centre line within the lap
+F_D = 7  # [m] lateral offset from the centre line, left-positive
+F_STEER = 8  # [-] last applied steer input
+F_THROTTLE = 9  # [-] last applied throttle input
+F_FINISH_TIME = 10  # [s] time of crossing the finish line (interpolated within the step); -1 if not finished
+F_DR_SUM = 11  # [m] sum of target-lane distances at checkpoints (delta_r numerator)
+F_DV_SUM = 12  # [m/s] sum of target-speed differences at checkpoints (delta_v numerator)
+F_WEAR = 13  # [-] tyre wear proportion (derived from F_ACC_YAW, kept for observers)
+N_FLOAT = 14
+
+# integers per kart
+I_CENTRE_IDX = 0  # centre-line sample nearest to the kart (search hint)
+I_CP_PASSED = 1  # checkpoints passed since the start (0 = start line; laps * N = finished)
+I_LANE = 2  # lane (1-based) at the last checkpoint crossing
+I_LANE_COUNT = 3  # eq. (9) counter of lanes crossed on the current straight / curve run
+I_ILLEGAL = 4  # illegal lane changes
+I_FAULTS = 5  # collisions at fault
+I_LAST_FAULT_STEP = 6  # step of the last at-fault contact (for the 1.5 s merge window)
+I_WALL_HITS = 7  # wall contacts (rising edges)
+I_WALL_CONTACT = 8  # 1 while touching a wall
+I_BUFFER_VIOLATIONS = 9  # s0/s1 buffer violations (rising edges, as the nose-side kart)
+I_DR_COUNT = 10  # checkpoints that had a target lane
+I_DV_COUNT = 11  # checkpoints that had a target speed
+I_FINISHED = 12  # 1 once finished
+I_CONTACTS = 13  # kart-kart contacts (rising edges), at fault or not
+I_EVENTS = 14  # bit mask of what happened to this kart in the last step (EV_*)
+N_INT = 15
+
+# integers per race
+R_STEP = 0  # steps simulated
+R_DONE = 1  # 1 once every kart finished or the time limit passed
+N_RACE = 2
+
+# event bits in I_EVENTS
+EV_CHECKPOINT = 1
+EV_ILLEGAL_LANE_CHANGE = 2
+EV_FAULT_COLLISION = 4
+EV_WALL_HIT = 8
+EV_FINISHED = 16
+EV_CONTACT = 32
+
+# ray hit kinds
+HIT_NONE = 0
+HIT_WALL = 1
+HIT_KART = 2
+
+# packed rule parameters (see sim_core.world._rule_vector)
+RP_TIME_LIMIT_STEPS = 0
+RP_LANE_LIMIT = 1
+RP_FAULT_COOLDOWN_STEPS = 2
+RP_CONTACT_MARGIN = 3
+RP_CONE_COS = 4
+RP_BUFFER_SIDE = 5
+RP_BUFFER_BEHIND = 6
+RP_BEHIND_OVERLAP = 7
+RP_LANE_DEADZONE = 8
+RP_LAPS = 9
+RP_DT = 10
+RP_RAY_RANGE = 11
+RP_RAY_ORIGIN = 12
+N_RULE = 13

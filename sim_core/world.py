@@ -1,0 +1,390 @@
+"""The batched world: B independent races of K karts on one track, advanced together at 50 Hz.
+
+The live server uses B = 1, tournaments and training use large B; all run this same code. State lives
+in packed numpy arrays (layout in :mod:`sim_core.state`) and is advanced by the compiled kernels in
+:mod:`sim_core.step`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim_core import state as st
+from sim_core.geometry import track_arrays
+from sim_core.params import DT, SimParams
+from sim_core.step import sense_batch, step_batch
+from sim_core.track import Track
+
+MAX_KARTS = 8
+DEFAULT_START_LANES = (2, 3, 1, 4)
+START_OFFSET = 3.0  # [m] the front row stands this far past checkpoint 0 (as in the original)
+ROW_SPACING = 4.0  # [m] between grid rows
+
+
+@dataclass(frozen=True)
+class KartResult:
+    """One kart's result in one race (per-race figures of the paper's tables)."""
+
+    kart: int
+    finished: bool
+    finish_time: float | None  # [s]
+    laps_completed: int
+    checkpoints_passed: int
+    collisions_at_fault: int
+    illegal_lane_changes: int
+    safety_score: int  # collisions at fault + illegal lane changes
+    wall_hits: int
+    contacts: int
+    buffer_violations: int
+    delta_r: float | None  # [m] mean target-lane distance at checkpoints that had a target
+    delta_v: float | None  # [m/s] mean target-speed difference at checkpoints that had a target
+    position: int  # 1-based finishing / running order
+
+
+@dataclass(frozen=True)
+class RaceResult:
+    """Result of one race: per-kart figures and the winner (None when nobody finished)."""
+
+    karts: tuple[KartResult, ...]
+    winner: int | None
+    duration: float  # [s] simulated time
+    done: bool
+
+
+@dataclass(frozen=True)
+class KartSnapshot:
+    """What an observer sees of one kart at one instant."""
+
+    x: float
+    y: float
+    heading: float
+    speed: float
+    yaw_rate: float
+    wear: float
+    progress: float  # [m] along the centre line within the lap
+    lateral: float  # [m] left-positive
+    checkpoints_passed: int
+    lane: int
+    lane_change_count: int
+    finished: bool
+    steer: float
+    throttle: float
+
+
+class World:
+    """B races x K karts on one track. Construct, :meth:`reset`, then :meth:`step` with (B, K, 2) actions.
+
+    Actions are ``[steer, throttle]`` in [-1, 1] (steer positive = left; throttle negative brakes and, from
+    standstill, reverses). Out-of-range values are clamped and NaN counts as 0.
+    """
+
+    def __init__(
+        self,
+        track: Track,
+        n_races: int = 1,
+        n_karts: int = 2,
+        params: SimParams | None = None,
+        *,
+        laps: int | None = None,
+        sensors: bool = True,
+    ) -> None:
+        if not 1 <= n_karts <= MAX_KARTS:
+            raise ValueError(f"n_karts must be in 1..{MAX_KARTS}, got {n_karts}")
+        if n_races < 1:
+            raise ValueError(f"n_races must be >= 1, got {n_races}")
+        self.track = track
+        self.params = params or SimParams()
+        self.laps = int(laps if laps is not None else track.laps)
+        if self.laps < 1:
+            raise ValueError(f"laps must be >= 1, got {self.laps}")
+        self.n_races = n_races
+        self.n_karts = n_karts
+        self.sensors = sensors
+        self.arrays = track_arrays(track)
+        self.kart_vector = self.params.kart.as_array()
+        self.rule_vector = self._rule_vector()
+        self.ray_angles = self.params.sensors.angles_rad_left_positive()
+        n = track.n_checkpoints
+        self.fstate = np.zeros((n_races, n_karts, st.N_FLOAT))
+        self.istate = np.zeros((n_races, n_karts, st.N_INT), dtype=np.int64)
+        self.rstate = np.zeros((n_races, st.N_RACE), dtype=np.int64)
+        self.pair_flags = np.zeros((n_races, n_karts, n_karts), dtype=np.int64)
+        self.target_lane = np.zeros((n_races, n_karts, n), dtype=np.int64)
+        self.target_speed = np.full((n_races, n_karts, n), np.nan)
+        n_rays = len(self.ray_angles)
+        self.ray_dist = np.full((n_races, n_karts, n_rays), self.params.sensors.max_range)
+        self.ray_hit = np.zeros((n_races, n_karts, n_rays), dtype=np.int64)
+        self._no_action = np.zeros((n_races, n_karts, 2))
+        self.reset()
+
+    def _rule_vector(self) -> np.ndarray:
+        rules = self.params.rules
+        sensors = self.params.sensors
+        v = np.zeros(st.N_RULE)
+        v[st.RP_TIME_LIMIT_STEPS] = round(rules.time_limit / DT)
+        v[st.RP_LANE_LIMIT] = rules.lane_change_limit if rules.lane_change_limit is not None else self.track.lane_change_limit
+        v[st.RP_FAULT_COOLDOWN_STEPS] = round(rules.fault_cooldown / DT)
+        v[st.RP_CONTACT_MARGIN] = rules.contact_margin
+        v[st.RP_CONE_COS] = rules.fault_cone_cos
+        v[st.RP_BUFFER_SIDE] = rules.buffer_side
+        v[st.RP_BUFFER_BEHIND] = rules.buffer_behind
+        v[st.RP_BEHIND_OVERLAP] = rules.behind_lateral_overlap
+        v[st.RP_LANE_DEADZONE] = rules.lane_deadzone
+        v[st.RP_LAPS] = self.laps
+        v[st.RP_DT] = DT
+        v[st.RP_RAY_RANGE] = sensors.max_range
+        v[st.RP_RAY_ORIGIN] = sensors.origin_forward
+        return v
+
+    # ------------------------------------------------------------------ setup
+    @property
+    def lane_change_limit(self) -> int:
+        """L in force for this world."""
+        return int(self.rule_vector[st.RP_LANE_LIMIT])
+
+    def reset(
+        self,
+        races: int | list[int] | None = None,
+        start_lanes: tuple[int, ...] | list[int] | None = None,
+        wear: float | None = None,
+    ) -> None:
+        """Put karts on the starting grid of the given races (all by default), at rest.
+
+        The front row stands ``START_OFFSET`` m past checkpoint 0 in ``start_lanes`` (default lanes 2, 3, 1, 4);
+        karts 5-8 form a second row behind the line. Every counter is cleared.
+        """
+        lanes = tuple(start_lanes) if start_lanes is not None else DEFAULT_START_LANES
+        n_lanes = self.track.n_lanes
+        if start_lanes is not None and len(lanes) != self.n_karts:
+            raise ValueError(f"need one start lane for each of the {self.n_karts} karts, got {list(lanes)}")
+        for lane in lanes:
+            if not 1 <= lane <= n_lanes:
+                raise ValueError(f"start lanes must be in 1..{n_lanes}, got {list(lanes)}")
+        start_wear = self.params.rules.start_wear if wear is None else wear
+        for b in self._race_list(races):
+            self.fstate[b] = 0.0
+            self.istate[b] = 0
+            self.rstate[b] = 0
+            self.pair_flags[b] = 0
+            self.target_lane[b] = 0
+            self.target_speed[b] = np.nan
+            for k in range(self.n_karts):
+                row, col = divmod(k, 4)
+                lane = lanes[k] if k < len(lanes) else DEFAULT_START_LANES[col]
+                offset = START_OFFSET - ROW_SPACING * row
+                d = float(self.track.lane_offsets(0)[lane - 1])
+                self.place_kart(b, k, s=offset, d=d, wear=start_wear)
+        self._sense()
+
+    def place_kart(
+        self,
+        race: int,
+        kart: int,
+        s: float,
+        d: float,
+        *,
+        heading_offset: float = 0.0,
+        speed: float = 0.0,
+        wear: float | None = None,
+        lap: int = 0,
+    ) -> None:
+        """Put one kart at progress ``s`` [m] (negative = behind the start line) and lateral offset ``d`` [m].
+
+        Its checkpoint count is what a kart at that spot on lap ``lap`` has passed; its lane is the nearest
+        lane there; its heading is the track direction plus ``heading_offset`` [rad].
+        """
+        track = self.track
+        L = track.length
+        if s < 0:
+            s, lap = s + L, lap - 1
+        s = s % L
+        point, tangent = track.point_at(s)
+        normal = np.array([-tangent[1], tangent[0]])
+        xy = point + normal * d
+        heading = float(np.arctan2(tangent[1], tangent[0]) + heading_offset)
+        passed = int(np.searchsorted(track.checkpoint_s, s, side="right")) - 1
+        wear = self.params.rules.start_wear if wear is None else wear
+        f = self.fstate[race, kart]
+        i = self.istate[race, kart]
+        f[:] = 0.0
+        i[:] = 0
+        f[st.F_X], f[st.F_Y] = xy
+        f[st.F_HEADING] = (heading + np.pi) % (2 * np.pi) - np.pi
+        f[st.F_SPEED] = speed
+        f[st.F_ACC_YAW] = self.params.kart.yaw_for_wear(wear)
+        f[st.F_WEAR] = wear
+        f[st.F_S] = s
+        f[st.F_D] = d
+        f[st.F_FINISH_TIME] = -1.0
+        i[st.I_CENTRE_IDX] = int(np.searchsorted(track.centre_s, s, side="right")) - 1
+        i[st.I_CP_PASSED] = lap * track.n_checkpoints + passed
+        last_cp = passed % track.n_checkpoints
+        i[st.I_LANE] = track.lane_id(last_cp, d)
+        i[st.I_LAST_FAULT_STEP] = -(10**9)
+
+    def _race_list(self, races: int | list[int] | None) -> list[int]:
+        if races is None:
+            return list(range(self.n_races))
+        if isinstance(races, int):
+            return [races]
+        return list(races)
+
+    def _sense(self) -> None:
+        if self.sensors:
+            sense_batch(
+                self.fstate, self.istate, self.ray_dist, self.ray_hit, self.arrays, self.kart_vector,
+                self.rule_vector, self.ray_angles,
+            )
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, actions: np.ndarray | None = None, n_steps: int = 1) -> None:
+        """Advance every unfinished race by ``n_steps`` steps of 0.02 s holding ``actions`` (B, K, 2)."""
+        if actions is None:
+            actions = self._no_action
+        actions = np.asarray(actions, dtype=np.float64)
+        if actions.shape != (self.n_races, self.n_karts, 2):
+            raise ValueError(f"actions must have shape {(self.n_races, self.n_karts, 2)}, got {actions.shape}")
+        step_batch(
+            self.fstate, self.istate, self.rstate, self.pair_flags, self.target_lane, self.target_speed,
+            self.ray_dist, self.ray_hit, actions, self.arrays, self.kart_vector, self.rule_vector,
+            self.ray_angles, self.sensors, n_steps,
+        )
+
+    def set_target(self, race: int, kart: int, checkpoint: int, lane: int | None, speed: float | None) -> None:
+        """Tell the referee the planned lane / speed of a kart at a checkpoint (for delta_r and delta_v).
+
+        The target is consumed when the kart next crosses that checkpoint; ``None`` clears it.
+        """
+        c = checkpoint % self.track.n_checkpoints
+        if lane is not None and not 1 <= lane <= self.track.n_lanes:
+            raise ValueError(f"lane must be in 1..{self.track.n_lanes}, got {lane}")
+        self.target_lane[race, kart, c] = 0 if lane is None else lane
+        self.target_speed[race, kart, c] = np.nan if speed is None else float(speed)
+
+    # ------------------------------------------------------------------ views
+    @property
+    def done(self) -> np.ndarray:
+        """(B,) bool: race over (everyone finished or the time limit passed)."""
+        return self.rstate[:, st.R_DONE].astype(bool)
+
+    @property
+    def steps(self) -> np.ndarray:
+        """(B,) steps simulated per race."""
+        return self.rstate[:, st.R_STEP]
+
+    @property
+    def time(self) -> np.ndarray:
+        """(B,) race time [s]."""
+        return self.rstate[:, st.R_STEP] * DT
+
+    @property
+    def positions(self) -> np.ndarray:
+        """(B, K, 2) kart positions [m]."""
+        return self.fstate[:, :, st.F_X : st.F_Y + 1]
+
+    @property
+    def headings(self) -> np.ndarray:
+        """(B, K) headings [rad]."""
+        return self.fstate[:, :, st.F_HEADING]
+
+    @property
+    def speeds(self) -> np.ndarray:
+        """(B, K) speeds [m/s]."""
+        return self.fstate[:, :, st.F_SPEED]
+
+    @property
+    def events(self) -> np.ndarray:
+        """(B, K) bit masks (``sim_core.state.EV_*``) of what happened in the last step."""
+        return self.istate[:, :, st.I_EVENTS]
+
+    def total_progress(self) -> np.ndarray:
+        """(B, K) distance [m] driven toward the finish: checkpoints passed plus the way to the next one."""
+        track = self.track
+        n = track.n_checkpoints
+        passed = self.istate[:, :, st.I_CP_PASSED]
+        last = np.mod(passed, n)
+        since = np.mod(self.fstate[:, :, st.F_S] - track.checkpoint_s[last], track.length)
+        laps_done = np.floor_divide(passed, n)
+        return laps_done * track.length + track.checkpoint_s[last] + since
+
+    def kart_snapshot(self, race: int, kart: int) -> KartSnapshot:
+        """A copy of one kart's observable state."""
+        f = self.fstate[race, kart]
+        i = self.istate[race, kart]
+        return KartSnapshot(
+            x=float(f[st.F_X]),
+            y=float(f[st.F_Y]),
+            heading=float(f[st.F_HEADING]),
+            speed=float(f[st.F_SPEED]),
+            yaw_rate=float(f[st.F_YAW_RATE]),
+            wear=float(f[st.F_WEAR]),
+            progress=float(f[st.F_S]),
+            lateral=float(f[st.F_D]),
+            checkpoints_passed=int(i[st.I_CP_PASSED]),
+            lane=int(i[st.I_LANE]),
+            lane_change_count=int(i[st.I_LANE_COUNT]),
+            finished=bool(i[st.I_FINISHED]),
+            steer=float(f[st.F_STEER]),
+            throttle=float(f[st.F_THROTTLE]),
+        )
+
+    def standings(self, race: int) -> list[int]:
+        """Kart indices in race order: finishers by time, then the rest by progress."""
+        f = self.fstate[race]
+        progress = self.total_progress()[race]
+
+        def key(k: int) -> tuple[int, float]:
+            if self.istate[race, k, st.I_FINISHED]:
+                return (0, float(f[k, st.F_FINISH_TIME]))
+            return (1, -float(progress[k]))
+
+        return sorted(range(self.n_karts), key=key)
+
+    def result(self, race: int) -> RaceResult:
+        """The referee's result of race ``race`` (final once :attr:`done`)."""
+        n = self.track.n_checkpoints
+        order = self.standings(race)
+        karts = []
+        for k in range(self.n_karts):
+            f = self.fstate[race, k]
+            i = self.istate[race, k]
+            finished = bool(i[st.I_FINISHED])
+            faults = int(i[st.I_FAULTS])
+            illegal = int(i[st.I_ILLEGAL])
+            karts.append(
+                KartResult(
+                    kart=k,
+                    finished=finished,
+                    finish_time=float(f[st.F_FINISH_TIME]) if finished else None,
+                    laps_completed=max(int(i[st.I_CP_PASSED]), 0) // n,
+                    checkpoints_passed=int(i[st.I_CP_PASSED]),
+                    collisions_at_fault=faults,
+                    illegal_lane_changes=illegal,
+                    safety_score=faults + illegal,
+                    wall_hits=int(i[st.I_WALL_HITS]),
+                    contacts=int(i[st.I_CONTACTS]),
+                    buffer_violations=int(i[st.I_BUFFER_VIOLATIONS]),
+                    delta_r=float(f[st.F_DR_SUM] / i[st.I_DR_COUNT]) if i[st.I_DR_COUNT] else None,
+                    delta_v=float(f[st.F_DV_SUM] / i[st.I_DV_COUNT]) if i[st.I_DV_COUNT] else None,
+                    position=order.index(k) + 1,
+                )
+            )
+        finishers = [kr for kr in karts if kr.finished]
+        winner = min(finishers, key=lambda kr: (kr.finish_time, kr.kart)).kart if finishers else None
+        return RaceResult(tuple(karts), winner, float(self.time[race]), bool(self.done[race]))
+
+    # ------------------------------------------------------------------ state copies
+    def state_arrays(self) -> dict[str, np.ndarray]:
+        """Copies of every state array (for determinism checks, replays and restoring)."""
+        return {
+            "fstate": self.fstate.copy(),
+            "istate": self.istate.copy(),
+            "rstate": self.rstate.copy(),
+            "pair_flags": self.pair_flags.copy(),
+            "target_lane": self.target_lane.copy(),
+            "target_speed": self.target_speed.copy(),
+            "ray_dist": self.ray_dist.copy(),
+            "ray_hit": self.ray_hit.copy(),
+        }
