@@ -29,7 +29,12 @@ def driving_actions(world: World, follower: LaneFollower) -> np.ndarray:
     """Actions of a lane-following driver for every kart (computed once per controller update)."""
     lateral = np.where(np.arange(world.n_karts) % 2 == 0, 1.25, -1.25)[None, :]
     return follower.act(
-        world.positions, world.headings, world.speeds, world.fstate[:, :, st.F_S], world.fstate[:, :, st.F_WEAR], lateral
+        world.positions,
+        world.headings,
+        world.speeds,
+        world.fstate[:, :, st.F_S],
+        world.fstate[:, :, st.F_WEAR],
+        lateral,
     )
 
 

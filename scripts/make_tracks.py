@@ -39,7 +39,9 @@ def convert_spec(path: Path) -> None:
     for sec in spec["sections"]:
         checkpoints.append(
             # The checkpoint line is taken through the lane points (the scenes' trigger sits 0.407 m ahead).
-            Checkpoint(lane_line_centre(sec), float(math.radians(sec["heading_ccw_from_x_deg"])), int(sec["optimalLane"]))
+            Checkpoint(
+                lane_line_centre(sec), float(math.radians(sec["heading_ccw_from_x_deg"])), int(sec["optimalLane"])
+            )
         )
         if sec["is_straight"]:
             sections.append(Section(is_straight=True, length=float(sec["trackLength"])))

@@ -300,8 +300,8 @@ def ray_fan_walls(
     n = dxs.shape[0]
     for i in range(n):
         out[i] = max_range
-    cx = int(math.floor((ox - tr.ray_origin[0]) / tr.ray_cell))
-    cy = int(math.floor((oy - tr.ray_origin[1]) / tr.ray_cell))
+    cx = math.floor((ox - tr.ray_origin[0]) / tr.ray_cell)
+    cy = math.floor((oy - tr.ray_origin[1]) / tr.ray_cell)
     if cx < 0 or cy < 0 or cx >= tr.ray_shape[0] or cy >= tr.ray_shape[1]:
         return
     # the fan's mean direction: a segment with both ends behind the fan's half plane cannot be hit when the

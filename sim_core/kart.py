@@ -101,8 +101,15 @@ def longitudinal_speed(p: np.ndarray, speed: float, throttle: float, dt: float) 
 
 @njit(cache=True)
 def kart_step(
-    p: np.ndarray, x: float, y: float, heading: float, speed: float, accumulated_yaw: float,
-    steer: float, throttle: float, dt: float,
+    p: np.ndarray,
+    x: float,
+    y: float,
+    heading: float,
+    speed: float,
+    accumulated_yaw: float,
+    steer: float,
+    throttle: float,
+    dt: float,
 ) -> tuple[float, float, float, float, float, float]:
     """Advance one kart by ``dt``: returns (x, y, heading, speed, yaw_rate, accumulated_yaw)."""
     steer = clean_input(steer)

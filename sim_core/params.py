@@ -46,9 +46,7 @@ class KartParams:
 
     def lateral_limit(self, wear: float | np.ndarray) -> float | np.ndarray:
         """Lateral acceleration limit [m/s^2] for a tyre-wear proportion in [0, 1]."""
-        grip_g = self.lateral_g_worn + (1.0 - np.clip(wear, 0.0, 1.0)) * (
-            self.lateral_g_fresh - self.lateral_g_worn
-        )
+        grip_g = self.lateral_g_worn + (1.0 - np.clip(wear, 0.0, 1.0)) * (self.lateral_g_fresh - self.lateral_g_worn)
         return grip_g * GRAVITY
 
     def wear_from_yaw(self, accumulated_yaw: float | np.ndarray) -> float | np.ndarray:

@@ -158,8 +158,14 @@ def _resolve_pair(
     ci, si_ = math.cos(hi), math.sin(hi)
     cj, sj_ = math.cos(hj), math.sin(hj)
     dist, ti, tj = segment_closest(
-        xi - hl * ci, yi - hl * si_, xi + hl * ci, yi + hl * si_,
-        xj - hl * cj, yj - hl * sj_, xj + hl * cj, yj + hl * sj_,
+        xi - hl * ci,
+        yi - hl * si_,
+        xi + hl * ci,
+        yi + hl * si_,
+        xj - hl * cj,
+        yj - hl * sj_,
+        xj + hl * cj,
+        yj + hl * sj_,
     )
     if dist >= 2.0 * r + margin:
         return False, False, False
@@ -239,7 +245,15 @@ def step_race(
             continue
         steer, throttle = actions[b, k, 0], actions[b, k, 1]
         x, y, h, v, w, acc = kart_step(
-            kp, F[b, k, F_X], F[b, k, F_Y], F[b, k, F_HEADING], F[b, k, F_SPEED], F[b, k, F_ACC_YAW], steer, throttle, dt
+            kp,
+            F[b, k, F_X],
+            F[b, k, F_Y],
+            F[b, k, F_HEADING],
+            F[b, k, F_SPEED],
+            F[b, k, F_ACC_YAW],
+            steer,
+            throttle,
+            dt,
         )
         F[b, k, F_X], F[b, k, F_Y], F[b, k, F_HEADING], F[b, k, F_SPEED] = x, y, h, v
         F[b, k, F_YAW_RATE], F[b, k, F_ACC_YAW] = w, acc
@@ -366,11 +380,17 @@ def step_race(
                 nose_y = F[b, i, F_Y] + (hl + r) * math.sin(hi)
                 hj = F[b, j, F_HEADING]
                 cj, sj = math.cos(hj), math.sin(hj)
-                gap = point_segment_distance(
-                    nose_x, nose_y,
-                    F[b, j, F_X] - hl * cj, F[b, j, F_Y] - hl * sj,
-                    F[b, j, F_X] + hl * cj, F[b, j, F_Y] + hl * sj,
-                ) - r
+                gap = (
+                    point_segment_distance(
+                        nose_x,
+                        nose_y,
+                        F[b, j, F_X] - hl * cj,
+                        F[b, j, F_Y] - hl * sj,
+                        F[b, j, F_X] + hl * cj,
+                        F[b, j, F_Y] + hl * sj,
+                    )
+                    - r
+                )
                 if gap < max(rp[RP_BUFFER_BEHIND], rp[RP_BUFFER_SIDE]):
                     ahead = (F[b, j, F_S] - F[b, i, F_S] + 0.5 * L) % L - 0.5 * L
                     behind = ahead > 0.0 and abs(F[b, j, F_D] - F[b, i, F_D]) < rp[RP_BEHIND_OVERLAP]
@@ -478,15 +498,39 @@ def step_batch(
     for _ in range(n_steps):
         for b in range(F.shape[0]):
             step_race(
-                b, F, I, R, pair_flags, target_lane, target_speed, ray_dist, ray_hit, actions, tr, kp, rp,
-                ray_cos, ray_sin, sensors_on, scratch_f, scratch_b, scratch_pairs, scratch_fan,
+                b,
+                F,
+                I,
+                R,
+                pair_flags,
+                target_lane,
+                target_speed,
+                ray_dist,
+                ray_hit,
+                actions,
+                tr,
+                kp,
+                rp,
+                ray_cos,
+                ray_sin,
+                sensors_on,
+                scratch_f,
+                scratch_b,
+                scratch_pairs,
+                scratch_fan,
             )
 
 
 @njit(cache=True)
 def sense_batch(
-    F: np.ndarray, I: np.ndarray, ray_dist: np.ndarray, ray_hit: np.ndarray, tr: TrackArrays, kp: np.ndarray,
-    rp: np.ndarray, ray_angles: np.ndarray,
+    F: np.ndarray,
+    I: np.ndarray,
+    ray_dist: np.ndarray,
+    ray_hit: np.ndarray,
+    tr: TrackArrays,
+    kp: np.ndarray,
+    rp: np.ndarray,
+    ray_angles: np.ndarray,
 ) -> None:
     """Cast every kart's rays (used after a reset, before the first step)."""
     ray_cos = np.cos(ray_angles)

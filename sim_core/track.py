@@ -237,7 +237,7 @@ class Track:
         (lane 1 is on the left of the new driving direction), so the hand-set racing lanes are mirrored.
         """
         n = self.n_checkpoints
-        order = [0] + list(range(n - 1, 0, -1))
+        order = [0, *list(range(n - 1, 0, -1))]
         # New section j runs from old checkpoint order[j] to order[j+1], i.e. old section order[j+1] backwards.
         new_sections = tuple(self.sections[order[(j + 1) % n]].reversed() for j in range(n))
         new_checkpoints = []
@@ -254,6 +254,7 @@ class Track:
         s = np.concatenate([[0.0], np.cumsum(seg)[:-1]])
         length = float(seg.sum())
         cps = np.array([(length - self.checkpoint_s[old]) % length for old in order])
+
         def flip(a: np.ndarray) -> np.ndarray:
             return np.roll(a[::-1], 1).copy()
 
@@ -330,7 +331,7 @@ def _clip_inner_widths(xy: np.ndarray, wl: np.ndarray, wr: np.ndarray) -> tuple[
     ds = np.linalg.norm(forward, axis=1)
     curvature = dh / ds
     spacing = float(np.mean(np.linalg.norm(np.diff(xy, axis=0), axis=1)))
-    half_window = max(int(round(2.0 / spacing)), 1)
+    half_window = max(round(2.0 / spacing), 1)
     out = []
     for width, side in ((wl, 1.0), (wr, -1.0)):
         inner = side * curvature > 0
@@ -348,7 +349,7 @@ def resample_closed(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.
     seg = np.linalg.norm(np.diff(closed, axis=0), axis=1)
     cum = np.concatenate([[0.0], np.cumsum(seg)])
     length = float(cum[-1])
-    m = max(int(round(length / spacing)), 8)
+    m = max(round(length / spacing), 8)
     s = np.linspace(0.0, length, m, endpoint=False)
     x = np.interp(s, cum, closed[:, 0])
     y = np.interp(s, cum, closed[:, 1])
@@ -404,7 +405,9 @@ def build_track(
         cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(closed, axis=0), axis=1))])
         wl = np.interp(s, cum, np.append(cl[:, 2], cl[0, 2]))
         wr = np.interp(s, cum, np.append(cl[:, 3], cl[0, 3]))
-        provisional = Track(name, tuple(checkpoints), tuple(sections), xy, s, length, wl, wr, np.zeros(len(checkpoints)), wl, wr)
+        provisional = Track(
+            name, tuple(checkpoints), tuple(sections), xy, s, length, wl, wr, np.zeros(len(checkpoints)), wl, wr
+        )
         checkpoint_s = np.array([provisional.project(np.array(cp.centre))[0] for cp in checkpoints])
     wall_left, wall_right = _clip_inner_widths(xy, wl, wr)
     return Track(

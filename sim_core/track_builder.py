@@ -19,7 +19,7 @@ class Straight:
 
 @dataclass(frozen=True)
 class Curve:
-    """A curve with inner-edge radius ``inside_radius`` [m] turning ``angle_deg`` [deg] (one checkpoint at its start)."""
+    """A curve of inner-edge radius ``inside_radius`` [m] turning ``angle_deg`` [deg], one checkpoint at its start."""
 
     inside_radius: float
     angle_deg: float = 45.0
@@ -72,7 +72,9 @@ def chain_track(
     gap = math.hypot(x, y)
     heading_gap = abs(math.remainder(heading - math.pi / 2, 2 * math.pi))
     if gap > close_tolerance or heading_gap > 1e-6:
-        raise ValueError(f"pieces do not close: end is {gap:.3f} m and {math.degrees(heading_gap):.2f} deg from the start")
+        raise ValueError(
+            f"pieces do not close: end is {gap:.3f} m and {math.degrees(heading_gap):.2f} deg from the start"
+        )
     return build_track(
         name,
         checkpoints,
@@ -84,12 +86,15 @@ def chain_track(
     )
 
 
-def oval_pieces(long_straight: int, short_straight: int, inside_radius: float, racing_lanes: bool = True) -> list[Straight | Curve]:
+def oval_pieces(
+    long_straight: int, short_straight: int, inside_radius: float, racing_lanes: bool = True
+) -> list[Straight | Curve]:
     """A counter-clockwise oval: long straight, 180 deg, short... as 10 m straights and 45 deg curve pieces.
 
     ``long_straight`` and ``short_straight`` count 10 m pieces; each corner is 90 deg in two 45 deg pieces.
     The hand-set racing lane follows the original's pattern: outside before a corner, apex inside, out on exit.
     """
+
     def straight_run(n: int) -> list[Straight | Curve]:
         run: list[Straight | Curve] = [Straight(10.0, 3 if racing_lanes else None) for _ in range(n)]
         if racing_lanes and n:
@@ -97,9 +102,18 @@ def oval_pieces(long_straight: int, short_straight: int, inside_radius: float, r
         return run
 
     def corner() -> list[Straight | Curve]:
-        return [Curve(inside_radius, 45.0, True, 1 if racing_lanes else None), Curve(inside_radius, 45.0, True, 2 if racing_lanes else None)]
+        return [
+            Curve(inside_radius, 45.0, True, 1 if racing_lanes else None),
+            Curve(inside_radius, 45.0, True, 2 if racing_lanes else None),
+        ]
 
     return (
-        straight_run(long_straight) + corner() + straight_run(short_straight) + corner()
-        + straight_run(long_straight) + corner() + straight_run(short_straight) + corner()
+        straight_run(long_straight)
+        + corner()
+        + straight_run(short_straight)
+        + corner()
+        + straight_run(long_straight)
+        + corner()
+        + straight_run(short_straight)
+        + corner()
     )

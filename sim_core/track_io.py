@@ -7,6 +7,7 @@ is wrong.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from pathlib import Path
@@ -43,7 +44,9 @@ class _Fields:
         where = self.where if key is None else (f"{self.where}.{key}" if self.where else key)
         raise TrackFormatError(self.path, f"field {where or '<root>'}", problem)
 
-    def number(self, key: str, *, default: float | None = None, positive: bool = False, minimum: float | None = None) -> float:
+    def number(
+        self, key: str, *, default: float | None = None, positive: bool = False, minimum: float | None = None
+    ) -> float:
         if key not in self.obj:
             if default is None:
                 self.fail("missing", key)
@@ -117,7 +120,7 @@ def track_from_dict(data: Any, path: str | Path = "<memory>") -> Track:
         not isinstance(fractions_raw, list)
         or len(fractions_raw) < 1
         or not all(isinstance(f, (int, float)) and -1.0 < f < 1.0 for f in fractions_raw)
-        or any(a <= b for a, b in zip(fractions_raw, fractions_raw[1:]))
+        or any(a <= b for a, b in itertools.pairwise(fractions_raw))
     ):
         root.fail("expected a list of numbers in (-1, 1), strictly decreasing (lane 1 is leftmost)", "lane_fractions")
     n_lanes = len(fractions_raw)
@@ -305,7 +308,9 @@ def import_centreline_csv(
             raise TrackFormatError(path, f"line {lineno}", "values must be finite")
         x, y, w_right, w_left = values
         if w_right <= 0 or w_left <= 0:
-            raise TrackFormatError(path, f"line {lineno}", f"track widths must be > 0, got right={w_right}, left={w_left}")
+            raise TrackFormatError(
+                path, f"line {lineno}", f"track widths must be > 0, got right={w_right}, left={w_left}"
+            )
         rows.append((x * scale, y * scale, w_left * scale, w_right * scale))
     if len(rows) < 8:
         raise TrackFormatError(path, "file", f"need at least 8 centre-line rows, got {len(rows)}")
@@ -327,7 +332,7 @@ def import_centreline_csv(
     wr = np.interp(s * cum[-1] / length, cum, np.append(data[:, 3], data[0, 3]))
     tangent = np.roll(smooth, -1, axis=0) - np.roll(smooth, 1, axis=0)
     heading = np.unwrap(np.arctan2(tangent[:, 1], tangent[:, 0]))
-    n_cp = max(int(round(length / checkpoint_spacing)), 4)
+    n_cp = max(round(length / checkpoint_spacing), 4)
     idx = np.round(np.linspace(0, len(smooth), n_cp, endpoint=False)).astype(int)
     checkpoints: list[Checkpoint] = []
     sections: list[Section] = []

@@ -124,7 +124,9 @@ class World:
         sensors = self.params.sensors
         v = np.zeros(st.N_RULE)
         v[st.RP_TIME_LIMIT_STEPS] = round(rules.time_limit / DT)
-        v[st.RP_LANE_LIMIT] = rules.lane_change_limit if rules.lane_change_limit is not None else self.track.lane_change_limit
+        v[st.RP_LANE_LIMIT] = (
+            rules.lane_change_limit if rules.lane_change_limit is not None else self.track.lane_change_limit
+        )
         v[st.RP_FAULT_COOLDOWN_STEPS] = round(rules.fault_cooldown / DT)
         v[st.RP_CONTACT_MARGIN] = rules.contact_margin
         v[st.RP_CONE_COS] = rules.fault_cone_cos
@@ -234,8 +236,14 @@ class World:
     def _sense(self) -> None:
         if self.sensors:
             sense_batch(
-                self.fstate, self.istate, self.ray_dist, self.ray_hit, self.arrays, self.kart_vector,
-                self.rule_vector, self.ray_angles,
+                self.fstate,
+                self.istate,
+                self.ray_dist,
+                self.ray_hit,
+                self.arrays,
+                self.kart_vector,
+                self.rule_vector,
+                self.ray_angles,
             )
 
     # ------------------------------------------------------------------ stepping
@@ -247,9 +255,21 @@ class World:
         if actions.shape != (self.n_races, self.n_karts, 2):
             raise ValueError(f"actions must have shape {(self.n_races, self.n_karts, 2)}, got {actions.shape}")
         step_batch(
-            self.fstate, self.istate, self.rstate, self.pair_flags, self.target_lane, self.target_speed,
-            self.ray_dist, self.ray_hit, actions, self.arrays, self.kart_vector, self.rule_vector,
-            self.ray_angles, self.sensors, n_steps,
+            self.fstate,
+            self.istate,
+            self.rstate,
+            self.pair_flags,
+            self.target_lane,
+            self.target_speed,
+            self.ray_dist,
+            self.ray_hit,
+            actions,
+            self.arrays,
+            self.kart_vector,
+            self.rule_vector,
+            self.ray_angles,
+            self.sensors,
+            n_steps,
         )
 
     def set_target(self, race: int, kart: int, checkpoint: int, lane: int | None, speed: float | None) -> None:

@@ -1,0 +1,39 @@
+# One entry point for people and CI. `make run` sets up and runs the main job; `make test` sets up and
+# runs the whole test suite (what .ci/run calls).
+PYTHON ?= python3.11
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
+
+.PHONY: setup run test lint bench tracks clean
+
+$(STAMP): pyproject.toml
+	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	# torch is pinned to the local CPU wheel: any other spec pulls several GB of CUDA packages
+	$(BIN)/python -m pip install --quiet "torch==2.13.0"
+	$(BIN)/python -m pip install --quiet -e ".[dev,rl]"
+	@rm -f $(VENV)/.installed-* && touch $(STAMP)
+
+setup: $(STAMP)
+
+run: setup  ## set up, then run a headless race on the paper's oval (the server replaces this in issue 5)
+	$(BIN)/karting race --track oval
+
+test: setup  ## set up, then lint and run every test
+	$(BIN)/ruff check .
+	$(BIN)/python -m pytest -q
+
+lint: setup
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy
+
+bench: setup
+	$(BIN)/python benchmarks/sim_step.py
+
+tracks: setup  ## regenerate sim_core/tracks/*.json from ../shared/spec/tracks
+	$(BIN)/python scripts/make_tracks.py
+
+clean:
+	rm -rf $(VENV) .pytest_cache .ruff_cache .mypy_cache
