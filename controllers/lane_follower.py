@@ -37,8 +37,6 @@ class LaneFollower:
         self._s_ext = np.concatenate([s - track.length, s, s + track.length])
         self._x_ext = np.tile(track.centre_xy[:, 0], 3)
         self._y_ext = np.tile(track.centre_xy[:, 1], 3)
-        self._k_ext = np.tile(np.abs(track.centre_curvature), 3)
-        self._kappa_signed = np.tile(track.centre_curvature, 3)
         self._preview_offsets = np.linspace(0.0, self.params.preview, 41)
 
     def act(
@@ -76,7 +74,7 @@ class LaneFollower:
         # radius of the followed offset: R_offset = R_centre - d * sign(kappa)
         offset = np.asarray(lateral_target)[..., None] if np.ndim(lateral_target) else lateral_target
         radius = np.maximum(1.0 / np.maximum(kappa, 1e-6) - offset * np.sign(kappa_signed), 1.0)
-        a_lat = self.kart.lateral_limit(wear)[..., None] * p.grip_margin
+        a_lat = np.asarray(self.kart.lateral_limit(wear))[..., None] * p.grip_margin
         v_corner = np.sqrt(a_lat * radius)
         v_allowed = np.sqrt(v_corner**2 + 2.0 * self.kart.braking * p.grip_margin * self._preview_offsets)
         target = np.minimum(np.min(v_allowed, axis=-1), np.minimum(self.kart.top_speed, speed_cap))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -107,7 +108,7 @@ def test_steady_cornering_speed_is_at_the_lateral_limit(wear: float) -> None:
 
 def test_wear_lowers_the_cornering_speed() -> None:
     speeds = [circle_speed(PAPER_KART, 0.3, w)[0] for w in (0.0, 0.3, 0.6, 0.9)]
-    assert all(a > b for a, b in zip(speeds, speeds[1:]))
+    assert all(a > b for a, b in itertools.pairwise(speeds))
     # cornering speed scales with sqrt(grip): 1.5 g fresh vs 0.5 + 0.1 * 1.0 = 0.6 g at wear 0.9
     assert speeds[0] / speeds[-1] == pytest.approx(math.sqrt(1.5 / 0.6), rel=1e-6)
 
@@ -117,7 +118,7 @@ def test_wear_grows_exponentially_with_accumulated_yaw() -> None:
     x = y = heading = 0.0
     speed, acc_yaw = 8.0, 0.0
     for _ in range(int(60 / DT)):
-        x, y, heading, speed, yaw_rate, acc_yaw = kart_step(p, x, y, heading, speed, acc_yaw, 0.5, 0.3, DT)
+        x, y, heading, speed, _yaw_rate, acc_yaw = kart_step(p, x, y, heading, speed, acc_yaw, 0.5, 0.3, DT)
     # accumulated yaw is the integral of |yaw rate| (about 2 pi per full circle driven)
     assert acc_yaw > 2 * math.pi
     wear = float(PAPER_KART.wear_from_yaw(acc_yaw))

@@ -16,7 +16,12 @@ from sim_core.world import World
 def drive(world: World, follower: LaneFollower, lateral: np.ndarray, stopped: tuple[int, ...] = ()) -> None:
     while not world.done.all():
         actions = follower.act(
-            world.positions, world.headings, world.speeds, world.fstate[:, :, st.F_S], world.fstate[:, :, st.F_WEAR], lateral
+            world.positions,
+            world.headings,
+            world.speeds,
+            world.fstate[:, :, st.F_S],
+            world.fstate[:, :, st.F_WEAR],
+            lateral,
         )
         for k in stopped:
             actions[:, k] = (0.0, -1.0)

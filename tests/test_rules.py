@@ -39,7 +39,7 @@ lane_sequences = hs.lists(hs.integers(1, 4), min_size=2, max_size=60)
 @given(lanes=lane_sequences, flags=hs.lists(hs.booleans(), min_size=60, max_size=60), limit=hs.integers(0, 5))
 def test_counter_matches_the_reference(lanes: list[int], flags: list[bool], limit: int) -> None:
     straight = flags[: len(lanes)]
-    expected_counts, expected_illegal = reference_lane_counter(lanes, straight + [straight[-1]], limit)
+    expected_counts, expected_illegal = reference_lane_counter(lanes, [*straight, straight[-1]], limit)
     count = 0
     for c in range(1, len(lanes)):
         next_straight = straight[c] if c < len(straight) else straight[-1]
