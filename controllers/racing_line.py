@@ -1,0 +1,181 @@
+"""The offline racing line of the Fixed agents: a minimum-curvature line found by a QP (OSQP), a speed profile
+from the kart's limits, and the lane per checkpoint that the Fixed agents and the planner's rollouts use.
+
+Minimum curvature: the line is the centre line shifted by ``alpha_i`` along the normal at each of M samples
+(1 m apart); its curvature is approximated by second differences, so the sum of squared curvatures is a
+convex quadratic in ``alpha`` with box constraints (keep ``margin`` inside the walls). The speed profile is
+the usual forward (acceleration) / backward (braking) pass under the cornering speed of every point.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import osqp
+import scipy.sparse as sp
+from scipy.interpolate import CubicSpline
+
+from sim_core.params import KartParams
+from sim_core.track import Track
+
+LINE_SPACING = 1.0  # [m] sample spacing of the optimised line
+
+
+@dataclass(frozen=True)
+class RacingLine:
+    """A closed line around the track with its speed profile."""
+
+    s: np.ndarray  # (M,) [m] centre-line progress of each sample
+    offset: np.ndarray  # (M,) [m] left-positive lateral offset from the centre line
+    xy: np.ndarray  # (M, 2) [m] world positions
+    speed: np.ndarray  # (M,) [m/s] speed profile
+    lap_time: float  # [s] predicted lap time of the speed profile
+    checkpoint_lanes: tuple[int, ...]  # lane (1-based) nearest to the line at each checkpoint
+
+    def offset_at(self, s: float | np.ndarray) -> float | np.ndarray:
+        """Lateral offset [m] of the line at centre-line progress ``s`` (periodic interpolation)."""
+        length = self.s[-1] + (self.s[1] - self.s[0])
+        return np.interp(np.mod(s, length), self.s, self.offset, period=length)
+
+
+def _centre_samples(track: Track, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    m = max(round(track.length / spacing), 16)
+    s = np.linspace(0.0, track.length, m, endpoint=False)
+    period = track.length
+    x = np.interp(s, track.centre_s, track.centre_xy[:, 0], period=period)
+    y = np.interp(s, track.centre_s, track.centre_xy[:, 1], period=period)
+    nx = np.interp(s, track.centre_s, track.centre_normal[:, 0], period=period)
+    ny = np.interp(s, track.centre_s, track.centre_normal[:, 1], period=period)
+    norm = np.hypot(nx, ny)
+    wl = np.interp(s, track.centre_s, track.width_left, period=period)
+    wr = np.interp(s, track.centre_s, track.width_right, period=period)
+    return s, np.stack([x, y], axis=1), np.stack([nx / norm, ny / norm], axis=1), wl, wr
+
+
+def _line_qp(track: Track, margin: float, spacing: float):  # type: ignore[no-untyped-def]
+    """The pieces of the line QPs: samples, curvature and length Hessians and linear terms, and bounds."""
+    s, xy, normal, wl, wr = _centre_samples(track, spacing)
+    m = len(s)
+    second = sp.diags([np.ones(m), -2 * np.ones(m), np.ones(m)], [-1, 0, 1], shape=(m, m), format="lil")
+    second[0, m - 1] = 1.0
+    second[m - 1, 0] = 1.0
+    first = sp.diags([-np.ones(m), np.ones(m)], [0, 1], shape=(m, m), format="lil")
+    first[m - 1, 0] = 1.0
+    terms = []
+    for diff in (second.tocsc(), first.tocsc()):
+        ax = diff @ sp.diags(normal[:, 0])
+        ay = diff @ sp.diags(normal[:, 1])
+        terms.append(((ax.T @ ax + ay.T @ ay).tocsc(), ax.T @ (diff @ xy[:, 0]) + ay.T @ (diff @ xy[:, 1])))
+    lower = -(wr - margin)
+    upper = wl - margin
+    if np.any(lower > upper):
+        raise ValueError(f"track {track.name!r} is narrower than twice the margin {margin} m somewhere")
+    return s, xy, normal, terms, lower, upper
+
+
+def _solve_box_qp(hessian: sp.csc_matrix, linear: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    m = len(linear)
+    solver = osqp.OSQP()
+    solver.setup(
+        P=sp.triu(hessian, format="csc"),
+        q=linear,
+        A=sp.identity(m, format="csc"),
+        l=lower,
+        u=upper,
+        verbose=False,
+        eps_abs=1e-7,
+        eps_rel=1e-7,
+        max_iter=20000,
+        polishing=False,
+    )
+    result = solver.solve(raise_error=False)
+    if result.x is None or result.info.status not in ("solved", "solved inaccurate"):
+        raise RuntimeError(f"racing-line QP failed: {result.info.status}")
+    return np.clip(result.x, lower, upper)
+
+
+def minimum_curvature_offsets(
+    track: Track, margin: float, spacing: float = LINE_SPACING
+) -> tuple[np.ndarray, np.ndarray]:
+    """(s, alpha): centre-line progress and the offsets of the minimum-curvature line (solved with OSQP)."""
+    s, _, _, ((h_curv, q_curv), _), lower, upper = _line_qp(track, margin, spacing)
+    return s, _solve_box_qp(h_curv, q_curv, lower, upper)
+
+
+def speed_profile(xy: np.ndarray, kart: KartParams, wear: float) -> tuple[np.ndarray, float]:
+    """(speed at each point, lap time) of a closed line under the kart's limits at tyre wear ``wear``."""
+    nxt = np.roll(xy, -1, axis=0)
+    prv = np.roll(xy, 1, axis=0)
+    a = np.linalg.norm(xy - prv, axis=1)
+    b = np.linalg.norm(nxt - xy, axis=1)
+    c = np.linalg.norm(nxt - prv, axis=1)
+    cross = (xy[:, 0] - prv[:, 0]) * (nxt[:, 1] - prv[:, 1]) - (xy[:, 1] - prv[:, 1]) * (nxt[:, 0] - prv[:, 0])
+    curvature = 2.0 * np.abs(cross) / np.maximum(a * b * c, 1e-12)  # circle through three points
+    a_lat = float(kart.lateral_limit(wear))
+    v_max = np.minimum(kart.top_speed, np.sqrt(a_lat / np.maximum(curvature, 1e-9)))
+    ds = b  # distance from point i to i+1
+    v = v_max.copy()
+    m = len(v)
+    for _ in range(2):  # twice round the loop settles the periodic boundary
+        for i in range(m):
+            j = (i + 1) % m
+            v[j] = min(v[j], np.sqrt(v[i] ** 2 + 2.0 * kart.acceleration * ds[i]))
+        for i in range(m - 1, -1, -1):
+            j = (i + 1) % m
+            v[i] = min(v[i], np.sqrt(v[j] ** 2 + 2.0 * kart.braking * ds[i]))
+    lap_time = float(np.sum(2.0 * ds / (v + np.roll(v, -1))))
+    return v, lap_time
+
+
+def _lanes_at_checkpoints(track: Track, s: np.ndarray, offset: np.ndarray) -> tuple[int, ...]:
+    lanes = []
+    for c in range(track.n_checkpoints):
+        d = float(np.interp(track.checkpoint_s[c], s, offset, period=track.length))
+        lanes.append(track.lane_id(c, d))
+    return tuple(lanes)
+
+
+# weights of path length against curvature tried by the optimiser, relative to the ratio of the two Hessians
+LENGTH_WEIGHTS = (0.0, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1)
+
+
+def optimise_racing_line(track: Track, kart: KartParams, *, wear: float = 0.25, margin: float = 1.0) -> RacingLine:
+    """The fastest of a family of QP lines kept ``margin`` m inside the walls, with its speed profile.
+
+    Each line minimises squared curvature plus a weight times squared segment length (curvature matters
+    where the kart is grip-limited, length where it is not); the weight is chosen by the lap time of the
+    speed profile. Weight 0 is the pure minimum-curvature line.
+    """
+    s, centre, normal, ((h_curv, q_curv), (h_len, q_len)), lower, upper = _line_qp(track, margin, LINE_SPACING)
+    scale = h_curv.diagonal().sum() / h_len.diagonal().sum()
+    best: RacingLine | None = None
+    for weight in LENGTH_WEIGHTS:
+        offset = _solve_box_qp(h_curv + weight * scale * h_len, q_curv + weight * scale * q_len, lower, upper)
+        xy = centre + normal * offset[:, None]
+        speed, lap_time = speed_profile(xy, kart, wear)
+        if best is None or lap_time < best.lap_time:
+            best = RacingLine(s, offset, xy, speed, lap_time, _lanes_at_checkpoints(track, s, offset))
+    assert best is not None
+    return best
+
+
+def handset_line(track: Track, kart: KartParams, *, wear: float = 0.25) -> RacingLine:
+    """The original's hand-set lanes as a line through the racing lane at each checkpoint (a periodic cubic
+    spline of the lateral offset, so it is as smooth as a kart can drive it).
+
+    ``racing_lanes[i]`` is the lane aimed for at checkpoint i + 1 (the original's ``optimalLane`` semantics).
+    """
+    lanes = track.racing_lanes
+    if any(lane is None for lane in lanes):
+        raise ValueError(f"track {track.name!r} has no hand-set racing lanes")
+    n = track.n_checkpoints
+    at_checkpoint = [int(lanes[(c - 1) % n]) for c in range(n)]  # type: ignore[arg-type]
+    knots_s = np.asarray(track.checkpoint_s)
+    knots_d = np.array([track.lane_offsets(c)[at_checkpoint[c] - 1] for c in range(n)])
+    s, centre, normal, _, _ = _centre_samples(track, LINE_SPACING)
+    spline = CubicSpline(np.append(knots_s, track.length), np.append(knots_d, knots_d[0]), bc_type="periodic")
+    offset = spline(s)
+    xy = centre + normal * offset[:, None]
+    speed, lap_time = speed_profile(xy, kart, wear)
+    return RacingLine(s, offset, xy, speed, lap_time, tuple(at_checkpoint))
