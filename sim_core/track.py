@@ -250,9 +250,10 @@ class Track:
             new_checkpoints.append(Checkpoint(cp.centre, (cp.heading + np.pi) % (2 * np.pi), mirrored))
         xy = self.centre_xy[::-1]
         xy = np.roll(xy, 1, axis=0)  # keep sample 0 at the old sample 0
-        seg = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
-        s = np.concatenate([[0.0], np.cumsum(seg)[:-1]])
-        length = float(seg.sum())
+        # Same arc lengths as the forward track, measured the other way (new sample i is old sample -i), so
+        # the length is preserved exactly and reversing twice gives back centre_s / checkpoint_s.
+        length = self.length
+        s = np.concatenate([[0.0], length - self.centre_s[:0:-1]])
         cps = np.array([(length - self.checkpoint_s[old]) % length for old in order])
 
         def flip(a: np.ndarray) -> np.ndarray:

@@ -146,10 +146,13 @@ def track_from_dict(data: Any, path: str | Path = "<memory>") -> Track:
                 road.fail(f"must be <= 360, got {angle}", "angle_deg")
             turn = road.text("turn", choices=("left", "right"))
             centre_radius = inside + half_width
+            # "length" (centre-line length) is optional: tracks whose road is not symmetric about the centre
+            # line (imported ones) need it, since it does not follow from inside_radius and the nominal width.
+            length = road.number("length", default=math.radians(angle) * centre_radius, positive=True)
             sections.append(
                 Section(
                     is_straight=False,
-                    length=math.radians(angle) * centre_radius,
+                    length=length,
                     inside_radius=inside,
                     angle_deg=angle,
                     left_turn=turn == "left",
@@ -213,6 +216,7 @@ def track_to_dict(track: Track, *, include_centreline: bool = False) -> dict[str
                 "inside_radius": round(sec.inside_radius, 3),
                 "angle_deg": round(sec.angle_deg, 3),
                 "turn": "left" if sec.left_turn else "right",
+                "length": round(sec.length, 3),
             }
         entry: dict[str, Any] = {
             "centre": [round(cp.centre[0], 4), round(cp.centre[1], 4)],
@@ -289,20 +293,24 @@ def import_centreline_csv(
     except OSError as exc:
         raise TrackFormatError(path, "file", f"cannot read: {exc.strerror or exc}") from None
     rows: list[tuple[float, float, float, float]] = []
+    row_lines: list[int] = []  # file line number of each row
+    first_content_line = True
     for lineno, line in enumerate(lines, start=1):
         stripped = line.strip()
         if not stripped or stripped.startswith("#"):
             continue
         parts = [p.strip() for p in stripped.split(",")]
+        # Only the first non-comment line may be a header without '#', and only if none of it is a number
+        # (a damaged first data row must be reported, not silently dropped).
+        if first_content_line and not any(_is_number(p) for p in parts):
+            first_content_line = False
+            continue
+        first_content_line = False
         if len(parts) != 4:
-            if not rows and not _all_numeric(parts):
-                continue  # a header line without '#'
             raise TrackFormatError(path, f"line {lineno}", f"expected 4 comma-separated fields, got {len(parts)}")
         try:
             values = tuple(float(p) for p in parts)
         except ValueError:
-            if not rows:
-                continue  # header
             raise TrackFormatError(path, f"line {lineno}", f"not a number in {stripped!r}") from None
         if not all(math.isfinite(v) for v in values):
             raise TrackFormatError(path, f"line {lineno}", "values must be finite")
@@ -312,6 +320,7 @@ def import_centreline_csv(
                 path, f"line {lineno}", f"track widths must be > 0, got right={w_right}, left={w_left}"
             )
         rows.append((x * scale, y * scale, w_left * scale, w_right * scale))
+        row_lines.append(lineno)
     if len(rows) < 8:
         raise TrackFormatError(path, "file", f"need at least 8 centre-line rows, got {len(rows)}")
     data = np.asarray(rows)
@@ -320,7 +329,7 @@ def import_centreline_csv(
     steps = np.linalg.norm(np.diff(np.vstack([data[:, :2], data[:1, :2]]), axis=0), axis=1)
     if np.any(steps < 1e-9):
         bad = int(np.argmin(steps))
-        raise TrackFormatError(path, f"row {bad + 1}", "repeated point in the centre line")
+        raise TrackFormatError(path, f"line {row_lines[(bad + 1) % len(data)]}", "repeated point in the centre line")
     # Light circular smoothing of the centre line: measured centre lines are noisy at the 0.1 m level,
     # and the headings and curvature used to classify sections come from its derivatives.
     xy, s, length = resample_closed(data[:, :2], 0.5)
@@ -369,9 +378,9 @@ def import_centreline_csv(
     )
 
 
-def _all_numeric(parts: list[str]) -> bool:
+def _is_number(text: str) -> bool:
     try:
-        [float(p) for p in parts]
+        float(text)
     except ValueError:
         return False
     return True
