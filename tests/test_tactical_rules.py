@@ -1,0 +1,118 @@
+"""The discrete game's rules, attacked with random play: no sequence of legal moves breaks a rule."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as hs
+
+from controllers.tactical import discrete as dg
+from controllers.tactical.game import GameParams, build_tables
+from sim_core.params import PAPER_KART
+from sim_core.rules import lane_change_update
+from sim_core.track_io import get_track
+
+TABLES = {
+    (name, width): build_tables(get_track(name), PAPER_KART, GameParams(velocity_bin_width=width))
+    for name in ("oval", "complex")
+    for width in (1.0, 2.0)
+}
+
+
+def random_state(rng: np.random.Generator, tb, n_players: int, checkpoint: int) -> np.ndarray:
+    state = np.zeros((n_players, dg.N_FIELDS), dtype=np.int64)
+    lanes = rng.choice(4, size=n_players, replace=n_players > 4)
+    for p in range(n_players):
+        state[p, dg.CHECKPOINT] = checkpoint
+        state[p, dg.LANE] = lanes[p]
+        state[p, dg.BIN] = rng.integers(0, len(tb.bin_low))
+        state[p, dg.TIME] = rng.integers(0, 150)
+        state[p, dg.WEAR] = rng.integers(0, 8000)
+        state[p, dg.LANE_COUNT] = rng.integers(0, tb.lane_limit + 1)
+    return state
+
+
+@settings(max_examples=60)
+@given(
+    seed=hs.integers(0, 2**31 - 1),
+    key=hs.sampled_from(sorted(TABLES)),
+    n_players=hs.integers(1, 4),
+    start=hs.integers(0, 40),
+)
+def test_random_legal_play_never_breaks_a_rule(seed: int, key, n_players: int, start: int) -> None:
+    tb = TABLES[key]
+    n = len(tb.straight)
+    rng = np.random.default_rng(seed)
+    state = random_state(rng, tb, n_players, start)
+    moves = np.empty(4 * len(tb.bin_low), dtype=np.int64)
+    for rnd in range(8):
+        round_cp = start + rnd
+        while (p := dg.next_player(state, round_cp)) != dg.NO_PLAYER:
+            before = state[p].copy()
+            count = dg.legal_moves(tb, state, p, moves)
+            if count == 0:
+                return  # a dead end is a legal outcome of the game
+            action = int(moves[rng.integers(0, count)])
+            # the mover is the earliest of those still to move: leaders commit first
+            assert all(
+                state[q, dg.TIME] >= before[dg.TIME] for q in range(n_players) if state[q, dg.CHECKPOINT] == round_cp
+            )
+            assert dg.apply_move(tb, state, p, action)
+            c = round_cp % n
+            lane, vbin = divmod(action, len(tb.bin_low))
+            # lane-change rule, judged by the referee's own function
+            _, illegal = lane_change_update(
+                int(before[dg.LANE_COUNT]),
+                int(before[dg.LANE]),
+                lane,
+                bool(tb.straight[c]),
+                bool(tb.straight[(c + 1) % n]),
+                tb.lane_limit,
+            )
+            assert not illegal
+            # cornering: the bin's lower edge is within the cornering speed of the lane's radius at the wear
+            assert (
+                tb.bin_low[vbin]
+                <= dg.corner_speed(tb, tb.corner_radius[c, before[dg.LANE], lane], int(before[dg.WEAR])) + 1e-9
+            )
+            # collision pruning: nobody already at this checkpoint in this lane within the window
+            for q in range(n_players):
+                if q != p and state[q, dg.CHECKPOINT] == round_cp + 1 and state[q, dg.LANE] == lane:
+                    assert abs(state[q, dg.TIME] - state[p, dg.TIME]) >= tb.collision_window
+            assert state[p, dg.TIME] > before[dg.TIME]
+            assert state[p, dg.WEAR] >= before[dg.WEAR]
+
+
+def test_cornering_rules_out_fast_bins_in_the_hairpin() -> None:
+    tb = TABLES[("complex", 1.0)]
+    # complex section 11 is a 90 deg left hairpin with inside radius 1 m: lane 1 (inside) is at r = 1 m
+    state = np.zeros((1, dg.N_FIELDS), dtype=np.int64)
+    state[0, dg.CHECKPOINT] = 11
+    state[0, dg.LANE] = 0
+    state[0, dg.BIN] = 0
+    state[0, dg.WEAR] = 2500
+    moves = np.empty(64, dtype=np.int64)
+    count = dg.legal_moves(tb, state, 0, moves)
+    lanes = {int(m) // len(tb.bin_low) for m in moves[:count]}
+    assert 0 not in lanes  # radius 1 m allows ~3.5 m/s, below the lowest bin (6 m/s)
+    for m in moves[:count]:
+        lane, vbin = divmod(int(m), len(tb.bin_low))
+        assert tb.bin_low[vbin] <= dg.corner_speed(tb, tb.corner_radius[11, 0, lane], 2500)
+
+
+def test_wear_grows_through_curves_only() -> None:
+    tb = TABLES[("oval", 1.0)]
+    assert dg.worn_after(tb, 2500, 0.0) == 2500
+    assert dg.worn_after(tb, 2500, np.pi / 4) > 2500
+    expected = PAPER_KART.wear_from_yaw(PAPER_KART.yaw_for_wear(0.25) + np.pi / 4)
+    assert dg.worn_after(tb, 2500, np.pi / 4) == pytest.approx(expected * 10_000, abs=1)
+
+
+def test_terminal_values_reward_the_earlier_arrival() -> None:
+    tb = TABLES[("oval", 1.0)]
+    state = np.zeros((2, dg.N_FIELDS), dtype=np.int64)
+    state[:, dg.TIME] = (500, 550)
+    out = np.empty(2)
+    dg.terminal_values(tb, state, out)
+    assert out[0] == pytest.approx(0.75) and out[1] == pytest.approx(0.25)
