@@ -1,0 +1,268 @@
+"""Monte Carlo tree search over the discrete racing game (compiled).
+
+UCT selection (``Q/n + c sqrt(ln N / n)``, Q from the point of view of the player who chose the edge),
+expansion of one node per iteration, a rollout policy biased toward fast legal moves, and backpropagation
+of every player's terminal value. The budget is a count of iterations, so a search is deterministic for a
+seed; the tree is kept in preallocated arrays.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from controllers.tactical import discrete as dg
+from controllers.tactical.game import GameTables
+
+NO_NODE = -1
+REJECTION_TRIES = 8  # random legal move in rollouts: draws before falling back to listing every legal move
+
+
+@njit(cache=True)
+def _round_of(state: np.ndarray, start_round: int, final_round: int) -> int:
+    """The checkpoint whose round is being played: the lowest checkpoint any player still stands on."""
+    r = start_round
+    while r < final_round and dg.next_player(state, r) == dg.NO_PLAYER:
+        r += 1
+    return r
+
+
+@njit(cache=True)
+def _rollout(
+    tb: GameTables,
+    state: np.ndarray,
+    start_round: int,
+    final_round: int,
+    greedy: float,
+    moves: np.ndarray,
+    values: np.ndarray,
+) -> None:
+    """Play the game to the horizon from ``state`` (modified in place) and write every player's value.
+
+    The mover takes its fastest legal move (earliest arrival, then the smaller lane change) with probability
+    ``greedy``, otherwise a uniformly random legal one. A player with no legal move loses (0), the others win (1).
+    """
+    bins = tb.bin_low.shape[0]
+    n_lanes = tb.distance.shape[1]
+    n_actions = n_lanes * bins
+    r = _round_of(state, start_round, final_round)
+    while r < final_round:
+        p = dg.next_player(state, r)
+        if p == dg.NO_PLAYER:
+            r += 1
+            continue
+        action = -1
+        if np.random.random() < greedy:
+            best_key = 1 << 60
+            for lane in range(n_lanes):
+                # a higher arrival speed never arrives later, so the first legal bin from the top is this
+                # lane's fastest move
+                for vbin in range(bins - 1, -1, -1):
+                    arrival, _, ok = dg.move_outcome(tb, state, p, lane, vbin)
+                    if ok:
+                        key = arrival * 8 + abs(lane - state[p, dg.LANE])
+                        if key < best_key:
+                            action, best_key = lane * bins + vbin, key
+                        break
+        else:
+            # rejection sampling is uniform over the legal moves and usually needs one or two draws
+            for _ in range(REJECTION_TRIES):
+                candidate = np.random.randint(0, n_actions)
+                _, _, ok = dg.move_outcome(tb, state, p, candidate // bins, candidate % bins)
+                if ok:
+                    action = candidate
+                    break
+            if action < 0:
+                count = dg.legal_moves(tb, state, p, moves)
+                if count > 0:
+                    action = moves[np.random.randint(0, count)]
+        if action < 0:
+            for q in range(state.shape[0]):
+                values[q] = 1.0
+            values[p] = 0.0
+            return
+        dg.apply_move(tb, state, p, action)
+    dg.terminal_values(tb, state, values)
+
+
+@njit(cache=True)
+def search(
+    tb: GameTables,
+    root_state: np.ndarray,
+    horizon: int,
+    iterations: int,
+    seed: int,
+    exploration: float,
+    greedy: float,
+    tree_state: np.ndarray,
+    tree_parent: np.ndarray,
+    tree_action: np.ndarray,
+    tree_mover: np.ndarray,
+    tree_round: np.ndarray,
+    tree_visits: np.ndarray,
+    tree_value: np.ndarray,
+    tree_first_child: np.ndarray,
+    tree_next_sibling: np.ndarray,
+    tree_untried: np.ndarray,
+    tree_untried_count: np.ndarray,
+) -> int:
+    """Run ``iterations`` MCTS iterations from ``root_state``; returns the number of tree nodes.
+
+    Node 0 is the root. ``tree_value[n]`` sums the value, for the player who moved into node n, of every
+    simulation through n. All ``tree_*`` arrays must hold ``iterations + 1`` nodes.
+    """
+    np.random.seed(seed)
+    players = root_state.shape[0]
+    start_round = root_state[:, dg.CHECKPOINT].min()
+    final_round = start_round + horizon
+    moves = np.empty(tree_untried.shape[1], dtype=np.int64)
+    values = np.empty(players)
+    scratch = np.empty_like(root_state)
+
+    # root
+    tree_state[0] = root_state
+    tree_parent[0] = NO_NODE
+    tree_action[0] = -1
+    tree_round[0] = _round_of(root_state, start_round, final_round)
+    tree_visits[0] = 0
+    tree_value[0] = 0.0
+    tree_first_child[0] = NO_NODE
+    tree_next_sibling[0] = NO_NODE
+    tree_mover[0] = dg.next_player(root_state, tree_round[0]) if tree_round[0] < final_round else dg.NO_PLAYER
+    tree_untried_count[0] = 0
+    if tree_mover[0] != dg.NO_PLAYER:
+        tree_untried_count[0] = dg.legal_moves(tb, tree_state[0], tree_mover[0], tree_untried[0])
+    n_nodes = 1
+
+    for _ in range(iterations):
+        # ---- selection
+        node = 0
+        while tree_mover[node] != dg.NO_PLAYER and tree_untried_count[node] == 0 and tree_first_child[node] != NO_NODE:
+            log_n = math.log(max(tree_visits[node], 1))
+            best, best_score = NO_NODE, -1e300
+            child = tree_first_child[node]
+            while child != NO_NODE:
+                visits = tree_visits[child]
+                score = tree_value[child] / visits + exploration * math.sqrt(log_n / visits)
+                if score > best_score:
+                    best, best_score = child, score
+                child = tree_next_sibling[child]
+            node = best
+        # ---- expansion
+        if tree_mover[node] != dg.NO_PLAYER and tree_untried_count[node] > 0:
+            k = np.random.randint(0, tree_untried_count[node])
+            action = tree_untried[node, k]
+            tree_untried_count[node] -= 1
+            tree_untried[node, k] = tree_untried[node, tree_untried_count[node]]
+            child = n_nodes
+            n_nodes += 1
+            tree_state[child] = tree_state[node]
+            dg.apply_move(tb, tree_state[child], tree_mover[node], action)
+            tree_parent[child] = node
+            tree_action[child] = action
+            tree_visits[child] = 0
+            tree_value[child] = 0.0
+            tree_first_child[child] = NO_NODE
+            tree_next_sibling[child] = tree_first_child[node]
+            tree_first_child[node] = child
+            tree_round[child] = _round_of(tree_state[child], tree_round[node], final_round)
+            if tree_round[child] < final_round:
+                tree_mover[child] = dg.next_player(tree_state[child], tree_round[child])
+                tree_untried_count[child] = dg.legal_moves(
+                    tb, tree_state[child], tree_mover[child], tree_untried[child]
+                )
+            else:
+                tree_mover[child] = dg.NO_PLAYER
+                tree_untried_count[child] = 0
+            node = child
+        # ---- simulation
+        if tree_mover[node] != dg.NO_PLAYER and tree_untried_count[node] == 0 and tree_first_child[node] == NO_NODE:
+            # the player to move is stuck
+            for q in range(players):
+                values[q] = 1.0
+            values[tree_mover[node]] = 0.0
+        else:
+            scratch[:, :] = tree_state[node]
+            _rollout(tb, scratch, tree_round[node], final_round, greedy, moves, values)
+        # ---- backpropagation: each node is credited with the value of the player who moved into it
+        while node != NO_NODE:
+            tree_visits[node] += 1
+            parent = tree_parent[node]
+            if parent != NO_NODE:
+                tree_value[node] += values[tree_mover[parent]]
+            node = parent
+    return n_nodes
+
+
+class SearchTree:
+    """Preallocated arrays of one search tree (capacity ``iterations + 1`` nodes)."""
+
+    def __init__(self, capacity: int, players: int, max_actions: int) -> None:
+        self.capacity = capacity
+        self.state = np.zeros((capacity, players, dg.N_FIELDS), dtype=np.int64)
+        self.parent = np.zeros(capacity, dtype=np.int64)
+        self.action = np.zeros(capacity, dtype=np.int64)
+        self.mover = np.zeros(capacity, dtype=np.int64)
+        self.round = np.zeros(capacity, dtype=np.int64)
+        self.visits = np.zeros(capacity, dtype=np.int64)
+        self.value = np.zeros(capacity, dtype=np.float64)
+        self.first_child = np.zeros(capacity, dtype=np.int64)
+        self.next_sibling = np.zeros(capacity, dtype=np.int64)
+        self.untried = np.zeros((capacity, max_actions), dtype=np.int64)
+        self.untried_count = np.zeros(capacity, dtype=np.int64)
+        self.size = 0
+
+    def run(
+        self,
+        tb: GameTables,
+        root_state: np.ndarray,
+        horizon: int,
+        iterations: int,
+        seed: int,
+        exploration: float,
+        greedy: float,
+    ) -> int:
+        """Search ``iterations`` times from ``root_state`` into this tree (replacing its contents)."""
+        if iterations + 1 > self.capacity:
+            raise ValueError(f"tree holds {self.capacity} nodes, {iterations + 1} needed")
+        self.size = search(
+            tb,
+            root_state,
+            horizon,
+            iterations,
+            seed,
+            exploration,
+            greedy,
+            self.state,
+            self.parent,
+            self.action,
+            self.mover,
+            self.round,
+            self.visits,
+            self.value,
+            self.first_child,
+            self.next_sibling,
+            self.untried,
+            self.untried_count,
+        )
+        return self.size
+
+    def children(self, node: int) -> list[int]:
+        """Child node indices of ``node``."""
+        out = []
+        child = int(self.first_child[node])
+        while child != NO_NODE:
+            out.append(child)
+            child = int(self.next_sibling[child])
+        return out
+
+    def principal_variation(self) -> list[int]:
+        """Nodes from the root following the most visited child (ties: higher mean value)."""
+        path = [0]
+        while True:
+            kids = self.children(path[-1])
+            if not kids:
+                return path
+            path.append(max(kids, key=lambda c: (self.visits[c], self.value[c] / max(self.visits[c], 1))))
