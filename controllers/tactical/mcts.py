@@ -88,6 +88,40 @@ def _rollout(
 
 
 @njit(cache=True)
+def _init_root(
+    tb: GameTables,
+    root_state: np.ndarray,
+    start_round: int,
+    final_round: int,
+    tree_state: np.ndarray,
+    tree_parent: np.ndarray,
+    tree_action: np.ndarray,
+    tree_mover: np.ndarray,
+    tree_round: np.ndarray,
+    tree_visits: np.ndarray,
+    tree_value: np.ndarray,
+    tree_first_child: np.ndarray,
+    tree_next_sibling: np.ndarray,
+    tree_untried: np.ndarray,
+    tree_untried_count: np.ndarray,
+) -> int:
+    """Make node 0 the root of a fresh tree; returns the node count (1)."""
+    tree_state[0] = root_state
+    tree_parent[0] = NO_NODE
+    tree_action[0] = -1
+    tree_round[0] = _round_of(root_state, start_round, final_round)
+    tree_visits[0] = 0
+    tree_value[0] = 0.0
+    tree_first_child[0] = NO_NODE
+    tree_next_sibling[0] = NO_NODE
+    tree_mover[0] = dg.next_player(root_state, tree_round[0]) if tree_round[0] < final_round else dg.NO_PLAYER
+    tree_untried_count[0] = 0
+    if tree_mover[0] != dg.NO_PLAYER:
+        tree_untried_count[0] = dg.legal_moves(tb, tree_state[0], tree_mover[0], tree_untried[0])
+    return 1
+
+
+@njit(cache=True)
 def search(
     tb: GameTables,
     root_state: np.ndarray,
@@ -107,11 +141,13 @@ def search(
     tree_next_sibling: np.ndarray,
     tree_untried: np.ndarray,
     tree_untried_count: np.ndarray,
+    resume_nodes: int,
 ) -> int:
     """Run ``iterations`` MCTS iterations from ``root_state``; returns the number of tree nodes.
 
     Node 0 is the root. ``tree_value[n]`` sums the value, for the player who moved into node n, of every
-    simulation through n. All ``tree_*`` arrays must hold ``iterations + 1`` nodes.
+    simulation through n. With ``resume_nodes`` > 0 the search continues the tree of that many nodes already
+    grown from the same root. The ``tree_*`` arrays must hold ``resume_nodes + iterations + 1`` nodes.
     """
     np.random.seed(seed)
     players = root_state.shape[0]
@@ -121,21 +157,26 @@ def search(
     values = np.empty(players)
     scratch = np.empty_like(root_state)
 
-    # root
-    tree_state[0] = root_state
-    tree_parent[0] = NO_NODE
-    tree_action[0] = -1
-    tree_round[0] = _round_of(root_state, start_round, final_round)
-    tree_visits[0] = 0
-    tree_value[0] = 0.0
-    tree_first_child[0] = NO_NODE
-    tree_next_sibling[0] = NO_NODE
-    tree_mover[0] = dg.next_player(root_state, tree_round[0]) if tree_round[0] < final_round else dg.NO_PLAYER
-    tree_untried_count[0] = 0
-    if tree_mover[0] != dg.NO_PLAYER:
-        tree_untried_count[0] = dg.legal_moves(tb, tree_state[0], tree_mover[0], tree_untried[0])
-    n_nodes = 1
-
+    if resume_nodes > 0:
+        n_nodes = resume_nodes
+    else:
+        n_nodes = _init_root(
+            tb,
+            root_state,
+            start_round,
+            final_round,
+            tree_state,
+            tree_parent,
+            tree_action,
+            tree_mover,
+            tree_round,
+            tree_visits,
+            tree_value,
+            tree_first_child,
+            tree_next_sibling,
+            tree_untried,
+            tree_untried_count,
+        )
     for _ in range(iterations):
         # ---- selection
         node = 0
@@ -223,30 +264,15 @@ class SearchTree:
         seed: int,
         exploration: float,
         greedy: float,
+        resume: bool = False,
     ) -> int:
-        """Search ``iterations`` times from ``root_state`` into this tree (replacing its contents)."""
-        if iterations + 1 > self.capacity:
-            raise ValueError(f"tree holds {self.capacity} nodes, {iterations + 1} needed")
-        self.size = search(
-            tb,
-            root_state,
-            horizon,
-            iterations,
-            seed,
-            exploration,
-            greedy,
-            self.state,
-            self.parent,
-            self.action,
-            self.mover,
-            self.round,
-            self.visits,
-            self.value,
-            self.first_child,
-            self.next_sibling,
-            self.untried,
-            self.untried_count,
-        )
+        """Search ``iterations`` times from ``root_state``; ``resume`` continues the tree already grown from it."""
+        start = self.size if resume and self.size > 0 else 0
+        if start + iterations + 1 > self.capacity:
+            raise ValueError(f"tree holds {self.capacity} nodes, {start + iterations + 1} needed")
+        arrays = (self.state, self.parent, self.action, self.mover, self.round, self.visits, self.value)
+        links = (self.first_child, self.next_sibling, self.untried, self.untried_count)
+        self.size = search(tb, root_state, horizon, iterations, seed, exploration, greedy, *arrays, *links, start)
         return self.size
 
     def children(self, node: int) -> list[int]:
