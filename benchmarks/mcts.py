@@ -1,0 +1,61 @@
+"""MCTS tactical planner speed on the real game: 2 players, horizon 8, on `oval` and `complex`.
+
+Prints iterations/s of a 20,000-iteration search and the wall time of a 2,000-iteration plan (the full
+planner call: root construction, search, waypoint extraction). The last line is one JSON object with
+`iterations_per_s` (the slower track) and `plan_2000_ms` (the slower track, median of 5).
+Run from the repo root: ``.venv/bin/python benchmarks/mcts.py``.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import time
+
+from controllers.tactical.planner import PlayerState, TacticalPlanner
+from sim_core.params import PAPER_KART
+from sim_core.track_io import get_track
+
+
+def players(checkpoint: int) -> list[PlayerState]:
+    return [
+        PlayerState(kart=0, checkpoint=checkpoint, lane=2, speed=11.0, time=20.0, wear=0.3, lane_changes=0),
+        PlayerState(kart=1, checkpoint=checkpoint, lane=3, speed=12.0, time=20.15, wear=0.3, lane_changes=1),
+    ]
+
+
+def main() -> None:
+    rates: dict[str, float] = {}
+    plan_ms: dict[str, float] = {}
+    for name in ("oval", "complex"):
+        track = get_track(name)
+        big = TacticalPlanner(track, PAPER_KART, iterations=20_000, seed=1)
+        big.plan(players(2), 0)  # compile
+        big.reset()
+        t0 = time.perf_counter()
+        plan = big.plan(players(2), 0)
+        rates[name] = plan.iterations / (time.perf_counter() - t0)
+        small = TacticalPlanner(track, PAPER_KART, iterations=2_000, seed=1)
+        times = []
+        for i in range(5):
+            small.reset()
+            t0 = time.perf_counter()
+            small.plan(players(2 + i), 0)
+            times.append((time.perf_counter() - t0) * 1000)
+        plan_ms[name] = statistics.median(times)
+        print(f"{name}: {rates[name]:,.0f} iterations/s; 2,000-iteration plan {plan_ms[name]:.1f} ms (median of 5)")
+    print(
+        json.dumps(
+            {
+                "iterations_per_s": round(min(rates.values())),
+                "plan_2000_ms": round(max(plan_ms.values()), 2),
+                "iterations_per_s_per_track": {k: round(v) for k, v in rates.items()},
+                "plan_2000_ms_per_track": {k: round(v, 2) for k, v in plan_ms.items()},
+                "targets": {"iterations_per_s": 50000, "plan_2000_ms": 40},
+            }
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,191 @@
+"""The tactical planner: builds the discrete game's root from the karts' states, searches it with MCTS and
+returns waypoints for the ego kart and the predicted best responses of the others (paper section 4.1)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from controllers.tactical import discrete as dg
+from controllers.tactical.game import TIME_UNITS_PER_S, WEAR_UNITS, GameParams, GameTables, build_tables
+from controllers.tactical.mcts import SearchTree
+from sim_core.params import KartParams
+from sim_core.track import Track
+
+DEFAULT_EXPLORATION = 0.2  # UCT constant (values in [0, 1], value_scale 1 s): best measured on exact small games
+DEFAULT_GREEDY = 0.5  # probability that a rollout move is the fastest legal one
+WALL_CLOCK_CHUNK = 250  # iterations between wall-clock checks when a time cap is set
+
+
+@dataclass(frozen=True)
+class PlayerState:
+    """What the planner needs of one kart, taken at its last checkpoint crossing."""
+
+    kart: int  # index of the kart in the race
+    checkpoint: int  # checkpoints passed (absolute, not wrapped)
+    lane: int  # 1-based lane at that crossing
+    speed: float  # [m/s] current speed
+    time: float  # [s] race time of that crossing
+    wear: float  # [-] tyre wear
+    lane_changes: int  # the referee's eq. (9) counter
+
+
+@dataclass(frozen=True)
+class Waypoint:
+    """A planned (or predicted) pass of one kart through a checkpoint."""
+
+    checkpoint: int  # absolute checkpoint index
+    lane: int  # 1-based
+    position: tuple[float, float]  # [m] the lane point
+    speed: float  # [m/s] target speed (top of the planned velocity bin)
+    time: float  # [s] predicted arrival, relative to the root's leader
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The planner's answer: ego waypoints and every other player's predicted waypoints."""
+
+    ego: int
+    root_checkpoint: int
+    waypoints: dict[int, tuple[Waypoint, ...]]  # kart index -> waypoints in checkpoint order
+    iterations: int
+    nodes: int
+    seconds: float  # [s] wall time of the search
+
+    @property
+    def ego_waypoints(self) -> tuple[Waypoint, ...]:
+        """The ego kart's waypoints."""
+        return self.waypoints.get(self.ego, ())
+
+    def opponent_waypoints(self) -> dict[int, tuple[Waypoint, ...]]:
+        """Predicted waypoints of the other players."""
+        return {k: w for k, w in self.waypoints.items() if k != self.ego}
+
+
+class TacticalPlanner:
+    """MCTS over the discrete racing game for one ego kart. Deterministic for a seed (iteration budget)."""
+
+    def __init__(
+        self,
+        track: Track,
+        kart: KartParams,
+        params: GameParams | None = None,
+        *,
+        iterations: int = 2000,
+        seed: int = 0,
+        exploration: float = DEFAULT_EXPLORATION,
+        greedy: float = DEFAULT_GREEDY,
+        max_seconds: float | None = None,
+        lane_limit: int | None = None,
+    ) -> None:
+        self.track = track
+        self.params = params or GameParams()
+        self.tables: GameTables = build_tables(track, kart, self.params, lane_limit)
+        self.iterations = iterations
+        self.seed = seed
+        self.exploration = exploration
+        self.greedy = greedy
+        self.max_seconds = max_seconds
+        self._plans = 0
+        self._tree: SearchTree | None = None
+        self._tree_root: np.ndarray | None = None
+
+    def reset(self) -> None:
+        """Forget the search tree and the plan counter (a new race)."""
+        self._plans = 0
+        self._tree = None
+        self._tree_root = None
+
+    # ------------------------------------------------------------------ root
+    def speed_bin(self, speed: float) -> int:
+        """Velocity bin of a real speed (the original always used bin 0 here: a bug not copied)."""
+        tb = self.tables
+        return int(np.clip(np.searchsorted(tb.bin_low, speed, side="right") - 1, 0, len(tb.bin_low) - 1))
+
+    def root_state(self, players: Sequence[PlayerState], ego: int) -> tuple[np.ndarray, list[int]]:
+        """The game's root: players within the section window of the ego, all moved to the leader's checkpoint.
+
+        A player behind the leading checkpoint is advanced to it in its own lane at its current speed (the
+        original set its time from an older crossing instead). Times are relative to the earliest player.
+        """
+        by_kart = {p.kart: p for p in players}
+        if ego not in by_kart:
+            raise ValueError(f"ego kart {ego} is not among the players")
+        me = by_kart[ego]
+        window = self.params.section_window
+        chosen = [me] + [p for p in players if p.kart != ego and abs(p.checkpoint - me.checkpoint) < window]
+        leader_cp = max(p.checkpoint for p in chosen)
+        n = self.track.n_checkpoints
+        state = np.zeros((len(chosen), dg.N_FIELDS), dtype=np.int64)
+        times = []
+        for row, p in enumerate(chosen):
+            t = p.time
+            for c in range(p.checkpoint, leader_cp):
+                lane = p.lane - 1
+                t += self.tables.distance[c % n, lane, lane] / max(p.speed, 1.0)
+            times.append(t)
+            state[row, dg.CHECKPOINT] = leader_cp
+            state[row, dg.LANE] = p.lane - 1
+            state[row, dg.BIN] = self.speed_bin(p.speed)
+            state[row, dg.WEAR] = round(min(max(p.wear, 0.0), 1.0) * WEAR_UNITS)
+            state[row, dg.LANE_COUNT] = p.lane_changes
+        earliest = min(times)
+        for row, t in enumerate(times):
+            state[row, dg.TIME] = round((t - earliest) * TIME_UNITS_PER_S)
+        return state, [p.kart for p in chosen]
+
+    # ------------------------------------------------------------------ search
+    def plan(self, players: Sequence[PlayerState], ego: int) -> Plan:
+        """Search from the current states and return the ego plan and the predicted responses."""
+        root, karts = self.root_state(players, ego)
+        horizon = self.params.horizon
+        tb = self.tables
+        max_actions = len(tb.bin_low) * tb.distance.shape[1]
+        reuse = self._tree is not None and self._tree_root is not None and np.array_equal(self._tree_root, root)
+        budget = self.iterations
+        needed = (self._tree.size if reuse and self._tree is not None else 0) + budget + 1
+        if self._tree is None or self._tree.state.shape[1] != len(root) or self._tree.capacity < needed:
+            self._tree = SearchTree(max(needed, 2 * budget + 1), len(root), max_actions)
+            reuse = False
+        tree = self._tree
+        seed = self.seed * 1_000_003 + self._plans
+        self._plans += 1
+        t0 = time.perf_counter()
+        if self.max_seconds is None:
+            tree.run(tb, root, horizon, budget, seed, self.exploration, self.greedy, resume=reuse)
+            done = budget
+        else:
+            done = 0
+            while done < budget and (done == 0 or time.perf_counter() - t0 < self.max_seconds):
+                chunk = min(WALL_CLOCK_CHUNK, budget - done)
+                tree.run(tb, root, horizon, chunk, seed + done, self.exploration, self.greedy, resume=reuse or done > 0)
+                done += chunk
+        seconds = time.perf_counter() - t0
+        self._tree_root = root.copy()
+        return self._extract(tree, karts, ego, int(root[0, dg.CHECKPOINT]), done, seconds)
+
+    def _extract(
+        self, tree: SearchTree, karts: list[int], ego: int, root_cp: int, iterations: int, seconds: float
+    ) -> Plan:
+        tb = self.tables
+        bins = len(tb.bin_low)
+        per_player: dict[int, list[Waypoint]] = {k: [] for k in karts}
+        for node in tree.principal_variation()[1:]:
+            mover = int(tree.mover[tree.parent[node]])
+            lane, vbin = divmod(int(tree.action[node]), bins)
+            state = tree.state[node, mover]
+            checkpoint = int(state[dg.CHECKPOINT])
+            point = self.track.lane_point(checkpoint, lane + 1)
+            per_player[karts[mover]].append(
+                Waypoint(
+                    checkpoint=checkpoint,
+                    lane=lane + 1,
+                    position=(float(point[0]), float(point[1])),
+                    speed=float(tb.bin_high[vbin]),
+                    time=float(state[dg.TIME]) / TIME_UNITS_PER_S,
+                )
+            )
+        return Plan(ego, root_cp, {k: tuple(w) for k, w in per_player.items()}, iterations, tree.size, seconds)

@@ -1,0 +1,140 @@
+"""The MCTS tactical planner: search quality against exhaustive solutions, rule-abiding plans, determinism."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from exact_game import optimal_first_moves
+from hypothesis import given, settings
+from hypothesis import strategies as hs
+
+from controllers.tactical import discrete as dg
+from controllers.tactical.game import GameParams, build_tables
+from controllers.tactical.mcts import SearchTree
+from controllers.tactical.planner import DEFAULT_EXPLORATION, DEFAULT_GREEDY, PlayerState, TacticalPlanner
+from sim_core.params import PAPER_KART
+from sim_core.rules import lane_change_update
+from sim_core.track_io import get_track
+
+TRACKS = {name: get_track(name) for name in ("oval", "complex")}
+
+
+def random_small_games(count: int, seed: int = 0) -> list[tuple[object, np.ndarray]]:
+    rng = np.random.default_rng(seed)
+    tables = [build_tables(TRACKS[n], PAPER_KART, GameParams(velocity_bin_width=2.0)) for n in ("oval", "complex")]
+    games = []
+    moves = np.empty(64, dtype=np.int64)
+    while len(games) < count:
+        tb = tables[len(games) % 2]
+        state = np.zeros((2, dg.N_FIELDS), dtype=np.int64)
+        state[:, dg.CHECKPOINT] = rng.integers(0, len(tb.straight))
+        state[:, dg.LANE] = rng.choice(4, 2, replace=False)
+        state[:, dg.BIN] = rng.integers(0, len(tb.bin_low), 2)
+        state[:, dg.TIME] = (0, rng.integers(0, 60))
+        state[:, dg.WEAR] = rng.integers(1000, 5000, 2)
+        state[:, dg.LANE_COUNT] = rng.integers(0, 3, 2)
+        mover = dg.next_player(state, int(state[0, dg.CHECKPOINT]))
+        if dg.legal_moves(tb, state, mover, moves) >= 2:
+            games.append((tb, state))
+    return games
+
+
+def test_large_budget_finds_the_exact_best_first_move() -> None:
+    games = random_small_games(200)
+    hits = 0
+    for tb, state in games:
+        _, best, _ = optimal_first_moves(tb, state, horizon=2)
+        tree = SearchTree(20_001, 2, 64)
+        tree.run(tb, state, 2, 20_000, 1, DEFAULT_EXPLORATION, DEFAULT_GREEDY)
+        pick = max(tree.children(0), key=lambda c: tree.visits[c])
+        hits += int(tree.action[pick]) in best
+    assert hits / len(games) >= 0.9, f"exact best first move in {hits} of {len(games)} states"
+
+
+def players_from(rng: np.random.Generator, track, n_players: int) -> list[PlayerState]:
+    base = int(rng.integers(0, 3 * track.n_checkpoints))
+    players = []
+    for k in range(n_players):
+        players.append(
+            PlayerState(
+                kart=k,
+                checkpoint=base + int(rng.integers(0, 2)),
+                lane=int(rng.integers(1, 5)),
+                speed=float(rng.uniform(5.0, 15.0)),
+                time=float(rng.uniform(0.0, 1.0)),
+                wear=float(rng.uniform(0.0, 0.6)),
+                lane_changes=int(rng.integers(0, track.lane_change_limit + 1)),
+            )
+        )
+    return players
+
+
+@settings(max_examples=40)
+@given(seed=hs.integers(0, 2**31 - 1), track_name=hs.sampled_from(sorted(TRACKS)), n_players=hs.integers(1, 3))
+def test_plans_never_break_a_rule(seed: int, track_name: str, n_players: int) -> None:
+    track = TRACKS[track_name]
+    rng = np.random.default_rng(seed)
+    planner = TacticalPlanner(track, PAPER_KART, iterations=300, seed=seed)
+    players = players_from(rng, track, n_players)
+    plan = planner.plan(players, ego=0)
+    root, karts = planner.root_state(players, 0)
+    tb = planner.tables
+    n = track.n_checkpoints
+    arrivals: dict[tuple[int, int], list[float]] = {}
+    for row, kart in enumerate(karts):
+        lane, count, wear = int(root[row, dg.LANE]) + 1, int(root[row, dg.LANE_COUNT]), int(root[row, dg.WEAR])
+        checkpoint = int(root[row, dg.CHECKPOINT])
+        for wp in plan.waypoints[kart]:
+            assert wp.checkpoint == checkpoint + 1
+            c = checkpoint % n
+            count, illegal = lane_change_update(
+                count, lane, wp.lane, bool(tb.straight[c]), bool(tb.straight[(c + 1) % n]), tb.lane_limit
+            )
+            assert not illegal, f"kart {kart} breaks the lane-change limit at checkpoint {wp.checkpoint}"
+            limit = dg.corner_speed(tb, tb.corner_radius[c, lane - 1, wp.lane - 1], wear)
+            low = wp.speed - (tb.bin_high[0] - tb.bin_low[0])
+            assert low <= limit + 1e-9, f"kart {kart} plans {low} m/s into a {limit:.2f} m/s corner"
+            wear = dg.worn_after(tb, wear, tb.turn_angle[c])
+            arrivals.setdefault((wp.checkpoint, wp.lane), []).append(wp.time)
+            lane, checkpoint = wp.lane, wp.checkpoint
+    for times in arrivals.values():
+        times.sort()
+        for a, b in itertools.pairwise(times):
+            assert b - a >= tb.collision_window / 100 - 1e-9, "two karts planned into one lane at one checkpoint"
+
+
+def test_same_seed_same_plan() -> None:
+    track = TRACKS["complex"]
+    players = players_from(np.random.default_rng(5), track, 2)
+    plans = [TacticalPlanner(track, PAPER_KART, iterations=1500, seed=11).plan(players, 0) for _ in range(2)]
+    assert plans[0].waypoints == plans[1].waypoints
+    other = TacticalPlanner(track, PAPER_KART, iterations=1500, seed=12).plan(players, 0)
+    assert other.iterations == plans[0].iterations
+
+
+def test_plan_covers_the_horizon_and_maps_lanes_to_track_points() -> None:
+    track = TRACKS["oval"]
+    players = [PlayerState(0, 30, 2, 12.0, 10.0, 0.25, 0), PlayerState(1, 30, 3, 12.5, 10.1, 0.25, 0)]
+    plan = TacticalPlanner(track, PAPER_KART, iterations=3000, seed=0).plan(players, 0)
+    ego = plan.ego_waypoints
+    assert [w.checkpoint for w in ego][:3] == [31, 32, 33]
+    for w in ego:
+        assert np.allclose(w.position, track.lane_point(w.checkpoint, w.lane))
+        assert 6.0 <= w.speed <= 15.0
+    assert set(plan.opponent_waypoints()) == {1}
+
+
+def test_root_uses_the_real_speed_bin_and_the_section_window() -> None:
+    track = TRACKS["oval"]
+    planner = TacticalPlanner(track, PAPER_KART)
+    far = PlayerState(2, 40, 1, 14.0, 0.0, 0.2, 0)
+    players = [PlayerState(0, 30, 2, 12.4, 10.0, 0.25, 1), PlayerState(1, 31, 3, 9.0, 10.4, 0.3, 0), far]
+    root, karts = planner.root_state(players, 0)
+    assert karts == [0, 1]
+    assert root[0, dg.BIN] == 6  # 12.4 m/s lies in [12, 13)
+    assert (root[:, dg.CHECKPOINT] == 31).all()  # the kart behind is advanced to the leader's checkpoint
+    assert root[0, dg.LANE_COUNT] == 1
+    with pytest.raises(ValueError):
+        planner.root_state(players, ego=5)
