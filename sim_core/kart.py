@@ -73,7 +73,7 @@ def clean_input(value: float) -> float:
     return min(max(value, -1.0), 1.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def longitudinal_speed(p: np.ndarray, speed: float, throttle: float, dt: float) -> float:
     """Speed [m/s] after one step of ``throttle`` in [-1, 1], before the cornering limit."""
     curve = _pedal_curve(p, speed)
@@ -99,7 +99,7 @@ def longitudinal_speed(p: np.ndarray, speed: float, throttle: float, dt: float) 
     return max(new, -p[P_REVERSE_SPEED])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def kart_step(
     p: np.ndarray,
     x: float,
@@ -141,6 +141,9 @@ def kart_step(
     cos_mid, sin_mid = math.cos(mid_heading), math.sin(mid_heading)
     x += new_speed * (cos_mid * cos_beta - sin_mid * sin_beta) * dt
     y += new_speed * (sin_mid * cos_beta + cos_mid * sin_beta) * dt
-    heading = (heading + yaw_rate * dt + math.pi) % (2.0 * math.pi) - math.pi
+    wrapped = heading + yaw_rate * dt + math.pi
+    if not 0.0 < wrapped < 2.0 * math.pi:  # (inside, % would return it unchanged)
+        wrapped %= 2.0 * math.pi
+    heading = wrapped - math.pi
     accumulated_yaw += abs(yaw_rate) * dt
     return x, y, heading, new_speed, yaw_rate, accumulated_yaw

@@ -12,6 +12,7 @@ touched or seen.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -21,8 +22,11 @@ from sim_core.geometry import (
     centre_normal,
     locate,
     point_segment_distance,
+    ray_bin_scaled,
     ray_capsule,
+    ray_cell,
     ray_fan_walls,
+    ray_first_wall,
     segment_closest,
 )
 from sim_core.kart import P_HALF_LENGTH, P_RADIUS, P_WALL_FRICTION, kart_step, tyre_wear
@@ -83,26 +87,38 @@ from sim_core.state import (
     RP_TIME_LIMIT_STEPS,
 )
 
+# The per-race kernels run without numba's reference counting: they allocate nothing, and counting the
+# references of every array passed to or taken from a namedtuple (atomic updates) was half of a step's time.
+_NO_REFCOUNT: dict[str, Any] = {"cache": True, "_nrt": False}
+
+ORIGIN_TRACK_MARGIN = 0.1  # [m] sensor origins this far inside the walls' nominal offsets use the bin lists
 PAIR_BUFFER = 1  # bit in the pair flags: the nose-side kart is inside its buffer
 PAIR_CONTACT = 2  # bit in the pair flags: the two bodies touch
 CONTACT_ROUNDS = 4  # relaxation rounds of wall and kart-kart contact per step
 
 
-@njit(cache=True)
-def _resolve_walls(tr: TrackArrays, kp: np.ndarray, F: np.ndarray, I: np.ndarray, b: int, k: int, dt: float) -> bool:
-    """Push kart k out of the walls; a kart driving into a wall slides along it and loses speed."""
+@njit(**_NO_REFCOUNT)
+def _resolve_walls(
+    tr: TrackArrays, kp: np.ndarray, F: np.ndarray, I: np.ndarray, b: int, k: int, dt: float, located: np.ndarray
+) -> bool:
+    """Push kart k out of the walls; a kart driving into a wall slides along it and loses speed.
+
+    ``located[k]`` keeps [x, y, s, d, sample index] of the kart's last located position (the referee reuses
+    it when the kart has not moved since).
+    """
     hl = kp[P_HALF_LENGTH]
     r = kp[P_RADIUS]
     touched = False
     for _ in range(2):
         x, y, h = F[b, k, F_X], F[b, k, F_Y], F[b, k, F_HEADING]
-        ch, sh = math.cos(h), math.sin(h)
-        idx, _s, d = locate(tr, x, y, I[b, k, I_CENTRE_IDX])
+        idx, s, d = locate(tr, x, y, I[b, k, I_CENTRE_IDX])
         I[b, k, I_CENTRE_IDX] = idx
+        located[k, 0], located[k, 1], located[k, 2], located[k, 3], located[k, 4] = x, y, s, d, idx
         # the lateral offset is 1-Lipschitz, so a body within hl of the centre cannot reach a wall that is
         # farther than |d| + hl + r anywhere nearby
         if d + hl + r < tr.near_width_left[idx] and hl + r - d < tr.near_width_right[idx]:
             break
+        ch, sh = math.cos(h), math.sin(h)
         worst = 0.0
         push_x, push_y = 0.0, 0.0
         for frac in (1.0, 0.0, -1.0):  # front end, centre, rear end of the body axis
@@ -141,7 +157,7 @@ def _resolve_walls(tr: TrackArrays, kp: np.ndarray, F: np.ndarray, I: np.ndarray
     return touched
 
 
-@njit(cache=True)
+@njit(**_NO_REFCOUNT)
 def _resolve_pair(
     kp: np.ndarray, F: np.ndarray, b: int, i: int, j: int, margin: float, cone_cos: float
 ) -> tuple[bool, bool, bool]:
@@ -200,7 +216,7 @@ def _resolve_pair(
     return True, i_faults, j_faults
 
 
-@njit(cache=True)
+@njit(**_NO_REFCOUNT)
 def step_race(
     b: int,
     F: np.ndarray,
@@ -215,13 +231,17 @@ def step_race(
     tr: TrackArrays,
     kp: np.ndarray,
     rp: np.ndarray,
+    ray_bins: np.ndarray,
     ray_cos: np.ndarray,
     ray_sin: np.ndarray,
     sensors_on: bool,
     scratch_f: np.ndarray,
     scratch_b: np.ndarray,
     scratch_pairs: np.ndarray,
+    scratch_bodies: np.ndarray,
+    scratch_located: np.ndarray,
     scratch_fan: np.ndarray,
+    scratch_centre: np.ndarray,
 ) -> None:
     """Advance race ``b`` by one step (no-op once the race is done); ``scratch_*`` are work arrays."""
     if R[b, R_DONE]:
@@ -235,6 +255,7 @@ def step_race(
     r = kp[P_RADIUS]
     prev_s = scratch_f[0]
     prev_d = scratch_f[1]
+    located = scratch_located
 
     # ---- dynamics
     for k in range(K):
@@ -273,7 +294,7 @@ def step_race(
     any_pair = False
     for rnd in range(CONTACT_ROUNDS):
         for k in range(K):
-            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp, F, I, b, k, dt):
+            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp, F, I, b, k, dt, located):
                 wall_touch[k] = True
         any_pair = False
         for i in range(K):
@@ -294,7 +315,7 @@ def step_race(
     if any_pair:
         # kart-kart pushes of the last round may have moved a kart into a wall
         for k in range(K):
-            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp, F, I, b, k, dt):
+            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp, F, I, b, k, dt, located):
                 wall_touch[k] = True
 
     # ---- referee: progress, checkpoints, lanes, lane-change rule, plan following, finish
@@ -304,7 +325,12 @@ def step_race(
     for k in range(K):
         if I[b, k, I_FINISHED]:
             continue
-        idx, s, d = locate(tr, F[b, k, F_X], F[b, k, F_Y], I[b, k, I_CENTRE_IDX])
+        x, y = F[b, k, F_X], F[b, k, F_Y]
+        if x == located[k, 0] and y == located[k, 1] and I[b, k, I_CENTRE_IDX] == located[k, 4]:
+            # not moved since the wall check located it (locate from its own result returns the same)
+            idx, s, d = I[b, k, I_CENTRE_IDX], located[k, 2], located[k, 3]
+        else:
+            idx, s, d = locate(tr, x, y, I[b, k, I_CENTRE_IDX])
         I[b, k, I_CENTRE_IDX] = idx
         F[b, k, F_S] = s
         F[b, k, F_D] = d
@@ -312,10 +338,10 @@ def step_race(
             I[b, k, I_WALL_HITS] += 1
             I[b, k, I_EVENTS] |= EV_WALL_HIT
         I[b, k, I_WALL_CONTACT] = 1 if wall_touch[k] else 0
-        ds = (s - prev_s[k] + 0.5 * L) % L - 0.5 * L
+        ds = _wrap_mod(s - prev_s[k] + 0.5 * L, L) - 0.5 * L
         while ds > 0.0 and not I[b, k, I_FINISHED]:
             c = (I[b, k, I_CP_PASSED] + 1) % N
-            ahead = (tr.checkpoint_s[c] - prev_s[k]) % L
+            ahead = _wrap_mod(tr.checkpoint_s[c] - prev_s[k], L)
             if ahead > ds:
                 break
             frac = ahead / ds
@@ -352,7 +378,9 @@ def step_race(
                 F[b, k, F_FINISH_TIME] = (step + frac) * dt
                 I[b, k, I_EVENTS] |= EV_FINISHED
 
-    # ---- collisions at fault, contacts and safety buffers
+    # ---- collisions at fault, contacts and safety buffers (headings are final from here on)
+    body = scratch_bodies
+    _bodies(b, F, hl, body)
     cooldown = int(rp[RP_FAULT_COOLDOWN_STEPS])
     for k in range(K):
         if fault_touch[k]:
@@ -375,11 +403,9 @@ def step_race(
                 flags = (flags | PAIR_CONTACT) if touching else (flags & ~PAIR_CONTACT)
             violating = False
             if not I[b, i, I_FINISHED] and not I[b, j, I_FINISHED]:
-                hi = F[b, i, F_HEADING]
-                nose_x = F[b, i, F_X] + (hl + r) * math.cos(hi)
-                nose_y = F[b, i, F_Y] + (hl + r) * math.sin(hi)
-                hj = F[b, j, F_HEADING]
-                cj, sj = math.cos(hj), math.sin(hj)
+                nose_x = F[b, i, F_X] + (hl + r) * body[i, 0]
+                nose_y = F[b, i, F_Y] + (hl + r) * body[i, 1]
+                cj, sj = body[j, 0], body[j, 1]
                 gap = (
                     point_segment_distance(
                         nose_x,
@@ -392,7 +418,7 @@ def step_race(
                     - r
                 )
                 if gap < max(rp[RP_BUFFER_BEHIND], rp[RP_BUFFER_SIDE]):
-                    ahead = (F[b, j, F_S] - F[b, i, F_S] + 0.5 * L) % L - 0.5 * L
+                    ahead = _wrap_mod(F[b, j, F_S] - F[b, i, F_S] + 0.5 * L, L) - 0.5 * L
                     behind = ahead > 0.0 and abs(F[b, j, F_D] - F[b, i, F_D]) < rp[RP_BEHIND_OVERLAP]
                     violating = gap < required_buffer(behind, rp[RP_BUFFER_SIDE], rp[RP_BUFFER_BEHIND])
             if violating and not (flags & PAIR_BUFFER):
@@ -411,10 +437,38 @@ def step_race(
         R[b, R_DONE] = 1
 
     if sensors_on:
-        cast_rays(b, F, I, ray_dist, ray_hit, tr, kp, rp, ray_cos, ray_sin, scratch_fan)
+        centre = scratch_centre
+        for k in range(K):  # every kart was located this step (a finished one has not moved since)
+            centre[k, 0] = I[b, k, I_CENTRE_IDX]
+            centre[k, 1] = F[b, k, F_D]
+        cast_rays(b, F, I, ray_dist, ray_hit, tr, kp, rp, ray_bins, ray_cos, ray_sin, body, scratch_fan, centre)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _wrap_mod(x: float, m: float) -> float:
+    """``x % m`` (m > 0), without the library call when x already lies in (0, m)."""
+    if 0.0 < x < m:
+        return x
+    return x % m
+
+
+@njit(cache=True, inline="always")
+def _bodies(b: int, F: np.ndarray, hl: float, body: np.ndarray) -> None:
+    """Every kart's heading cos and sin and body axis end points: body[k] = [cos, sin, rear x, rear y,
+    front x, front y]."""
+    for k in range(F.shape[1]):
+        x, y = F[b, k, F_X], F[b, k, F_Y]
+        h = F[b, k, F_HEADING]
+        c, s = math.cos(h), math.sin(h)
+        body[k, 0] = c
+        body[k, 1] = s
+        body[k, 2] = x - hl * c
+        body[k, 3] = y - hl * s
+        body[k, 4] = x + hl * c
+        body[k, 5] = y + hl * s
+
+
+@njit(**_NO_REFCOUNT)
 def cast_rays(
     b: int,
     F: np.ndarray,
@@ -424,30 +478,56 @@ def cast_rays(
     tr: TrackArrays,
     kp: np.ndarray,
     rp: np.ndarray,
+    ray_bins: np.ndarray,
     ray_cos: np.ndarray,
     ray_sin: np.ndarray,
+    scratch_bodies: np.ndarray,
     scratch_fan: np.ndarray,
+    scratch_centre: np.ndarray,
 ) -> None:
-    """The range rays of every kart in race ``b`` (directions relative to the heading given by their cos
-    and sin): distance to the first wall or kart, and what it hit."""
+    """The range rays of every kart in race ``b`` (at angles from the heading whose cos and sin are given,
+    and which times ``tr.ray_bins / (2 pi)`` are ``ray_bins``): distance to the first wall or kart, and what
+    it hit. ``scratch_bodies`` holds the karts' bodies (see :func:`_bodies`) and ``scratch_centre`` their
+    located [sample index, lateral offset]; ``scratch_fan`` is (3, rays).
+
+    A sensor origin clearly between the walls (by the kart's lateral offset) tests each
+    ray against its cell's list for the ray's direction bin; any other origin tests the cell's whole reach
+    list, as :func:`ray_fan_walls` does. Both give the distance to the first wall.
+    """
     K = F.shape[1]
     hl = kp[P_HALF_LENGTH]
     r = kp[P_RADIUS]
     max_range = rp[RP_RAY_RANGE]
     origin = rp[RP_RAY_ORIGIN]
     n_rays = ray_cos.shape[0]
+    walls = tr.wall_segments
+    index = tr.ray_bin_index
+    start = tr.ray_bin_start
+    bins = tr.ray_bins
+    bin_scale = bins / (2.0 * math.pi)
+    inside = abs(origin) + ORIGIN_TRACK_MARGIN
+    body = scratch_bodies
     dxs = scratch_fan[0]
     dys = scratch_fan[1]
     wall = scratch_fan[2]
     for k in range(K):
-        h = F[b, k, F_HEADING]
-        ch, sh = math.cos(h), math.sin(h)
+        ch, sh = body[k, 0], body[k, 1]
         ox = F[b, k, F_X] + origin * ch
         oy = F[b, k, F_Y] + origin * sh
         for a in range(n_rays):
             dxs[a] = ch * ray_cos[a] - sh * ray_sin[a]
             dys[a] = sh * ray_cos[a] + ch * ray_sin[a]
-        ray_fan_walls(tr, ox, oy, dxs, dys, max_range, wall)
+        cell = ray_cell(tr, ox, oy)
+        idx, d = int(scratch_centre[k, 0]), scratch_centre[k, 1]
+        if cell >= 0 and d + inside < tr.near_width_left[idx] and inside - d < tr.near_width_right[idx]:
+            # on the track: one short list per ray
+            heading_bin = (F[b, k, F_HEADING] + math.pi) * bin_scale
+            base = cell * bins
+            for a in range(n_rays):
+                slot = base + ray_bin_scaled(heading_bin + ray_bins[a], bins)
+                wall[a] = ray_first_wall(walls, index, start[slot], start[slot + 1], ox, oy, dxs[a], dys[a], max_range)
+        else:
+            ray_fan_walls(tr, ox, oy, dxs, dys, max_range, wall)
         for a in range(n_rays):
             dx, dy = dxs[a], dys[a]
             dist = wall[a]
@@ -459,10 +539,7 @@ def cast_rays(
                 along = rel_x * dx + rel_y * dy
                 if along < -(hl + r) or along > dist + hl + r or abs(rel_x * dy - rel_y * dx) > hl + r:
                     continue
-                xj, yj = F[b, j, F_X], F[b, j, F_Y]
-                hj = F[b, j, F_HEADING]
-                cj, sj = math.cos(hj), math.sin(hj)
-                t = ray_capsule(ox, oy, dx, dy, xj - hl * cj, yj - hl * sj, xj + hl * cj, yj + hl * sj, r)
+                t = ray_capsule(ox, oy, dx, dy, body[j, 2], body[j, 3], body[j, 4], body[j, 5], r)
                 if t < dist:
                     dist, kind = t, HIT_KART
             ray_dist[b, k, a] = dist
@@ -491,10 +568,15 @@ def step_batch(
     K = F.shape[1]
     ray_cos = np.cos(ray_angles)
     ray_sin = np.sin(ray_angles)
+    ray_bins = (ray_angles + math.pi) % (2.0 * math.pi) - math.pi  # the bin offsets of the ray angles
+    ray_bins *= tr.ray_bins / (2.0 * math.pi)
     scratch_f = np.empty((2, K))
     scratch_b = np.zeros((2, K), dtype=np.bool_)
     scratch_pairs = np.zeros((K, K), dtype=np.bool_)
+    scratch_bodies = np.empty((K, 6))
+    scratch_located = np.full((K, 5), np.nan)
     scratch_fan = np.empty((3, ray_angles.shape[0]))
+    scratch_centre = np.empty((K, 2))
     for _ in range(n_steps):
         for b in range(F.shape[0]):
             step_race(
@@ -511,13 +593,17 @@ def step_batch(
                 tr,
                 kp,
                 rp,
+                ray_bins,
                 ray_cos,
                 ray_sin,
                 sensors_on,
                 scratch_f,
                 scratch_b,
                 scratch_pairs,
+                scratch_bodies,
+                scratch_located,
                 scratch_fan,
+                scratch_centre,
             )
 
 
@@ -535,6 +621,30 @@ def sense_batch(
     """Cast every kart's rays (used after a reset, before the first step)."""
     ray_cos = np.cos(ray_angles)
     ray_sin = np.sin(ray_angles)
+    ray_bins = (ray_angles + math.pi) % (2.0 * math.pi) - math.pi  # the bin offsets of the ray angles
+    ray_bins *= tr.ray_bins / (2.0 * math.pi)
+    scratch_bodies = np.empty((F.shape[1], 6))
     scratch_fan = np.empty((3, ray_angles.shape[0]))
+    scratch_centre = np.empty((F.shape[1], 2))
     for b in range(F.shape[0]):
-        cast_rays(b, F, I, ray_dist, ray_hit, tr, kp, rp, ray_cos, ray_sin, scratch_fan)
+        for k in range(F.shape[1]):
+            idx, _s, d = locate(tr, F[b, k, F_X], F[b, k, F_Y], I[b, k, I_CENTRE_IDX])
+            scratch_centre[k, 0] = idx
+            scratch_centre[k, 1] = d
+        _bodies(b, F, kp[P_HALF_LENGTH], scratch_bodies)
+        cast_rays(
+            b,
+            F,
+            I,
+            ray_dist,
+            ray_hit,
+            tr,
+            kp,
+            rp,
+            ray_bins,
+            ray_cos,
+            ray_sin,
+            scratch_bodies,
+            scratch_fan,
+            scratch_centre,
+        )
