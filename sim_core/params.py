@@ -42,7 +42,7 @@ class KartParams:
     wear_gain: float = 4.0 / 3.0  # [-]
     body_half_length: float = 0.55  # [m] half length of the capsule's axis (body length 2.0 m)
     body_radius: float = 0.45  # [m] capsule radius (body width 0.9 m)
-    wall_friction: float = 5.0  # [m/s^2] speed lost while sliding along a wall
+    wall_friction: float = 0.5  # [-] Coulomb coefficient: sliding speed lost per unit of speed into a wall
 
     def lateral_limit(self, wear: float | np.ndarray) -> float | np.ndarray:
         """Lateral acceleration limit [m/s^2] for a tyre-wear proportion in [0, 1]."""
@@ -117,7 +117,7 @@ class RuleParams:
 
     time_limit: float = 120.0  # [s] a kart that has not finished by then is DNF
     lane_change_limit: int | None = None  # [lanes] L; None takes the track's own limit
-    fault_cooldown: float = 1.5  # [s] contact within this time of the last one is the same collision
+    fault_cooldown: float = 1.5  # [s] contact (kart or wall) within this time of the last one is the same one
     contact_margin: float = 0.02  # [m] bodies closer than this are in contact
     fault_cone_cos: float = 0.5  # [-] front touches if the contact normal is within acos(0.5) = 60 deg of heading
     buffer_side: float = 0.5  # [m] s0: minimum nose-to-body distance when not directly behind (eq. 7-8)

@@ -32,7 +32,7 @@ I_LANE_COUNT = 3  # eq. (9) counter of lanes crossed on the current straight / c
 I_ILLEGAL = 4  # illegal lane changes
 I_FAULTS = 5  # collisions at fault
 I_LAST_FAULT_STEP = 6  # step of the last at-fault contact (for the 1.5 s merge window)
-I_WALL_HITS = 7  # wall contacts (rising edges)
+I_WALL_HITS = 7  # wall hits (contacts separated by more than the fault cooldown)
 I_WALL_CONTACT = 8  # 1 while touching a wall
 I_BUFFER_VIOLATIONS = 9  # s0/s1 buffer violations (rising edges, as the nose-side kart)
 I_DR_COUNT = 10  # checkpoints that had a target lane
@@ -40,7 +40,8 @@ I_DV_COUNT = 11  # checkpoints that had a target speed
 I_FINISHED = 12  # 1 once finished
 I_CONTACTS = 13  # kart-kart contacts (rising edges), at fault or not
 I_EVENTS = 14  # bit mask of what happened to this kart in the last step (EV_*)
-N_INT = 15
+I_LAST_WALL_STEP = 15  # step of the last wall contact (contacts within the fault cooldown are one hit)
+N_INT = 16
 
 # integers per race
 R_STEP = 0  # steps simulated

@@ -68,6 +68,7 @@ from sim_core.state import (
     I_LANE,
     I_LANE_COUNT,
     I_LAST_FAULT_STEP,
+    I_LAST_WALL_STEP,
     I_WALL_CONTACT,
     I_WALL_HITS,
     R_DONE,
@@ -146,7 +147,8 @@ def _resolve_walls(
                 nx, ny = centre_normal(tr, idx)
                 along = 1e-9 if (tx * ny - ty * nx) > 0.0 else -1e-9
             sign = 1.0 if along > 0.0 else -1.0
-            slide = max(abs(along) - kp[P_WALL_FRICTION] * dt, 0.0)
+            # Coulomb friction: the harder the kart drives into the wall, the more sliding speed it loses
+            slide = max(abs(along) + kp[P_WALL_FRICTION] * into, 0.0)
             vx, vy = sign * tx, sign * ty
             if speed >= 0.0:
                 F[b, k, F_HEADING] = math.atan2(vy, vx)
@@ -334,9 +336,12 @@ def step_race(
         I[b, k, I_CENTRE_IDX] = idx
         F[b, k, F_S] = s
         F[b, k, F_D] = d
-        if wall_touch[k] and not I[b, k, I_WALL_CONTACT]:
-            I[b, k, I_WALL_HITS] += 1
-            I[b, k, I_EVENTS] |= EV_WALL_HIT
+        if wall_touch[k]:
+            # contact within the merge window of the last one is the same hit (a kart scraping along)
+            if step - I[b, k, I_LAST_WALL_STEP] > int(rp[RP_FAULT_COOLDOWN_STEPS]):
+                I[b, k, I_WALL_HITS] += 1
+                I[b, k, I_EVENTS] |= EV_WALL_HIT
+            I[b, k, I_LAST_WALL_STEP] = step
         I[b, k, I_WALL_CONTACT] = 1 if wall_touch[k] else 0
         ds = _wrap_mod(s - prev_s[k] + 0.5 * L, L) - 0.5 * L
         while ds > 0.0 and not I[b, k, I_FINISHED]:

@@ -225,6 +225,7 @@ class World:
         last_cp = passed % track.n_checkpoints
         i[st.I_LANE] = track.lane_id(last_cp, d)
         i[st.I_LAST_FAULT_STEP] = -(10**9)
+        i[st.I_LAST_WALL_STEP] = -(10**9)
 
     def _race_list(self, races: int | list[int] | None) -> list[int]:
         if races is None:

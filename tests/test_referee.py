@@ -128,3 +128,25 @@ def test_events_report_checkpoints() -> None:
         world.step(np.array([[[0.0, 1.0]]]))
         seen += int(world.events[0, 0] & st.EV_CHECKPOINT != 0)
     assert seen == 3
+
+
+def test_sliding_along_a_wall_costs_coulomb_friction() -> None:
+    track = get_track("oval")
+    world = World(track, 1, 1, sensors=False)
+    angle = np.deg2rad(20.0)
+    # on the first straight, heading 20 deg into the left wall, coasting
+    world.place_kart(0, 0, 8.0, 3.0, heading_offset=angle, speed=10.0)
+    previous = 10.0
+    for _ in range(100):
+        world.step(np.zeros((1, 1, 2)))
+        if world.istate[0, 0, st.I_WALL_CONTACT]:
+            break
+        previous = float(world.speeds[0, 0])
+    else:
+        raise AssertionError("never reached the wall")
+    approach = previous - 2.0 * 0.02  # this step's coasting
+    mu = world.params.kart.wall_friction
+    assert world.speeds[0, 0] == pytest.approx(approach * (np.cos(angle) - mu * np.sin(angle)), rel=1e-6)
+    # and it now runs parallel to the wall (the straight heads +y)
+    assert world.headings[0, 0] == pytest.approx(np.pi / 2, abs=1e-3)
+    assert world.istate[0, 0, st.I_WALL_HITS] == 1
