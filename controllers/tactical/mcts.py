@@ -291,4 +291,4 @@ class SearchTree:
             kids = self.children(path[-1])
             if not kids:
                 return path
-            path.append(max(kids, key=lambda c: (self.visits[c], self.value[c] / max(self.visits[c], 1))))
+            path.append(max(kids, key=lambda c: (int(self.visits[c]), float(self.value[c]) / max(int(self.visits[c]), 1))))
