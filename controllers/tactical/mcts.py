@@ -291,4 +291,8 @@ class SearchTree:
             kids = self.children(path[-1])
             if not kids:
                 return path
-            path.append(max(kids, key=lambda c: (int(self.visits[c]), float(self.value[c]) / max(int(self.visits[c]), 1))))
+            path.append(max(kids, key=self._rank))
+
+    def _rank(self, node: int) -> tuple[int, float]:
+        visits = int(self.visits[node])
+        return visits, float(self.value[node]) / max(visits, 1)
