@@ -138,3 +138,18 @@ def test_root_uses_the_real_speed_bin_and_the_section_window() -> None:
     assert root[0, dg.LANE_COUNT] == 1
     with pytest.raises(ValueError):
         planner.root_state(players, ego=5)
+
+
+def test_replanning_from_the_same_root_grows_the_same_tree() -> None:
+    track = TRACKS["complex"]
+    players = players_from(np.random.default_rng(9), track, 2)
+    planner = TacticalPlanner(track, PAPER_KART, iterations=1000, seed=3)
+    first = planner.plan(players, 0)
+    second = planner.plan(players, 0)
+    assert second.nodes > first.nodes  # the second search continued the first tree
+    moved = [PlayerState(p.kart, p.checkpoint + 1, p.lane, p.speed, p.time + 1.0, p.wear, 0) for p in players]
+    fresh = planner.plan(moved, 0)
+    assert fresh.nodes <= 1001  # a new root starts a new tree
+    # and the sequence of plans is reproducible
+    again = TacticalPlanner(track, PAPER_KART, iterations=1000, seed=3)
+    assert [again.plan(players, 0).waypoints, again.plan(players, 0).waypoints] == [first.waypoints, second.waypoints]

@@ -18,6 +18,7 @@ from sim_core.track import Track
 DEFAULT_EXPLORATION = 0.2  # UCT constant (values in [0, 1], value_scale 1 s): best measured on exact small games
 DEFAULT_GREEDY = 0.5  # probability that a rollout move is the fastest legal one
 WALL_CLOCK_CHUNK = 250  # iterations between wall-clock checks when a time cap is set
+TREE_CAPACITY_PLANS = 8  # a reused tree grows for up to this many plans' budgets before it starts afresh
 
 
 @dataclass(frozen=True)
@@ -27,9 +28,9 @@ class PlayerState:
     kart: int  # index of the kart in the race
     checkpoint: int  # checkpoints passed (absolute, not wrapped)
     lane: int  # 1-based lane at that crossing
-    speed: float  # [m/s] current speed
+    speed: float  # [m/s] speed at that crossing
     time: float  # [s] race time of that crossing
-    wear: float  # [-] tyre wear
+    wear: float  # [-] tyre wear at that crossing
     lane_changes: int  # the referee's eq. (9) counter
 
 
@@ -66,7 +67,11 @@ class Plan:
 
 
 class TacticalPlanner:
-    """MCTS over the discrete racing game for one ego kart. Deterministic for a seed (iteration budget)."""
+    """MCTS over the discrete racing game for one ego kart. Deterministic for a seed (iteration budget).
+
+    The game state only changes when a kart crosses a checkpoint, so re-plans between crossings see the
+    same root and continue growing the same tree (tree reuse); a new root starts a fresh tree.
+    """
 
     def __init__(
         self,
@@ -147,9 +152,11 @@ class TacticalPlanner:
         reuse = self._tree is not None and self._tree_root is not None and np.array_equal(self._tree_root, root)
         budget = self.iterations
         needed = (self._tree.size if reuse and self._tree is not None else 0) + budget + 1
+        if reuse and self._tree is not None and self._tree.capacity < needed:
+            reuse = False  # the reused tree is full: start afresh
+            needed = budget + 1
         if self._tree is None or self._tree.state.shape[1] != len(root) or self._tree.capacity < needed:
-            self._tree = SearchTree(max(needed, 2 * budget + 1), len(root), max_actions)
-            reuse = False
+            self._tree = SearchTree(TREE_CAPACITY_PLANS * budget + 1, len(root), max_actions)
         tree = self._tree
         seed = self.seed * 1_000_003 + self._plans
         self._plans += 1
