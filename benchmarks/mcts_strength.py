@@ -1,0 +1,43 @@
+"""Search strength against iterations: how often MCTS's first move is an exactly optimal one.
+
+200 random 2-player states on `oval` and `complex` (velocity bins 2 m/s, horizon 2) are solved exactly by
+backward induction (tests/exact_game.py); MCTS with the planner's defaults then searches each with a growing
+iteration budget. Run from the repo root: ``.venv/bin/python benchmarks/mcts_strength.py``; the last line
+is one JSON object mapping iterations to the fraction of exactly optimal first moves.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+from exact_game import optimal_first_moves
+from test_tactical_planner import random_small_games
+
+from controllers.tactical.mcts import SearchTree
+from controllers.tactical.planner import DEFAULT_EXPLORATION, DEFAULT_GREEDY
+
+BUDGETS = (50, 200, 1000, 3000, 10000, 20000)
+
+
+def main() -> None:
+    games = random_small_games(200)
+    optimal = [optimal_first_moves(tb, state, horizon=2)[1] for tb, state in games]
+    curve = {}
+    for budget in BUDGETS:
+        hits = 0
+        for (tb, state), best in zip(games, optimal):
+            tree = SearchTree(budget + 1, 2, 64)
+            tree.run(tb, state, 2, budget, 1, DEFAULT_EXPLORATION, DEFAULT_GREEDY)
+            pick = max(tree.children(0), key=lambda c: int(tree.visits[c]))
+            hits += int(tree.action[pick]) in best
+        curve[budget] = hits / len(games)
+        print(f"{budget:>6} iterations: exactly optimal first move in {hits}/{len(games)} states")
+    print(json.dumps({"optimal_first_move_fraction_by_iterations": curve}))
+
+
+if __name__ == "__main__":
+    main()
