@@ -1,0 +1,1 @@
+"""Linear-quadratic games: the feedback Nash solver and the LQNG waypoint tracker (paper section 4.2.3)."""
