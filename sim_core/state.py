@@ -22,7 +22,10 @@ F_FINISH_TIME = 10  # [s] time of crossing the finish line (interpolated within 
 F_DR_SUM = 11  # [m] sum of target-lane distances at checkpoints (delta_r numerator)
 F_DV_SUM = 12  # [m/s] sum of target-speed differences at checkpoints (delta_v numerator)
 F_WEAR = 13  # [-] tyre wear proportion (derived from F_ACC_YAW, kept for observers)
-N_FLOAT = 14
+F_CROSS_TIME = 14  # [s] race time of the last checkpoint crossing (interpolated within the step)
+F_CROSS_SPEED = 15  # [m/s] speed at the last checkpoint crossing
+F_CROSS_WEAR = 16  # [-] tyre wear at the last checkpoint crossing
+N_FLOAT = 17
 
 # integers per kart
 I_CENTRE_IDX = 0  # centre-line sample nearest to the kart (search hint)

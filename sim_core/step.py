@@ -39,6 +39,9 @@ from sim_core.state import (
     EV_ILLEGAL_LANE_CHANGE,
     EV_WALL_HIT,
     F_ACC_YAW,
+    F_CROSS_SPEED,
+    F_CROSS_TIME,
+    F_CROSS_WEAR,
     F_D,
     F_DR_SUM,
     F_DV_SUM,
@@ -353,6 +356,9 @@ def step_race(
             d_cross = prev_d[k] + frac * (d - prev_d[k])
             I[b, k, I_CP_PASSED] += 1
             I[b, k, I_EVENTS] |= EV_CHECKPOINT
+            F[b, k, F_CROSS_TIME] = (step + frac) * dt
+            F[b, k, F_CROSS_SPEED] = F[b, k, F_SPEED]
+            F[b, k, F_CROSS_WEAR] = F[b, k, F_WEAR]
             lane = 1
             best = abs(tr.lane_offsets[c, 0] - d_cross)
             for q in range(1, tr.lane_offsets.shape[1]):

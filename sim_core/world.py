@@ -220,6 +220,9 @@ class World:
         f[st.F_S] = s
         f[st.F_D] = d
         f[st.F_FINISH_TIME] = -1.0
+        f[st.F_CROSS_TIME] = 0.0
+        f[st.F_CROSS_SPEED] = speed
+        f[st.F_CROSS_WEAR] = wear
         i[st.I_CENTRE_IDX] = int(np.searchsorted(track.centre_s, s, side="right")) - 1
         i[st.I_CP_PASSED] = lap * track.n_checkpoints + passed
         last_cp = passed % track.n_checkpoints

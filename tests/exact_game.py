@@ -6,16 +6,19 @@ import numpy as np
 from numba import njit
 
 from controllers.tactical import discrete as dg
+from controllers.tactical.mcts import reference_times
 
 
 @njit(cache=True)
-def exact_values(tb, state: np.ndarray, round_cp: int, final_round: int, out: np.ndarray) -> None:
+def exact_values(
+    tb, state: np.ndarray, round_cp: int, final_round: int, reference: np.ndarray, out: np.ndarray
+) -> None:
     """Subgame-perfect values of ``state``: every mover picks the move that maximises its own value."""
     players = state.shape[0]
     while round_cp < final_round and dg.next_player(state, round_cp) == dg.NO_PLAYER:
         round_cp += 1
     if round_cp >= final_round:
-        dg.terminal_values(tb, state, out)
+        dg.terminal_values(tb, state, reference, out)
         return
     p = dg.next_player(state, round_cp)
     moves = np.empty(tb.distance.shape[1] * tb.bin_low.shape[0], dtype=np.int64)
@@ -30,7 +33,7 @@ def exact_values(tb, state: np.ndarray, round_cp: int, final_round: int, out: np
     for i in range(count):
         child = state.copy()
         dg.apply_move(tb, child, p, moves[i])
-        exact_values(tb, child, round_cp, final_round, child_values)
+        exact_values(tb, child, round_cp, final_round, reference, child_values)
         if child_values[p] > best:
             best = child_values[p]
             out[:] = child_values
@@ -46,10 +49,11 @@ def optimal_first_moves(
     count = dg.legal_moves(tb, state, p, moves)
     values = np.empty(count)
     out = np.empty(state.shape[0])
+    reference = reference_times(tb, state, horizon)
     for i in range(count):
         child = state.copy()
         dg.apply_move(tb, child, p, moves[i])
-        exact_values(tb, child, round_cp, round_cp + horizon, out)
+        exact_values(tb, child, round_cp, round_cp + horizon, reference, out)
         values[i] = out[p]
     best = values.max()
     return p, {int(moves[i]) for i in range(count) if values[i] >= best - tolerance}, values

@@ -114,5 +114,8 @@ def test_terminal_values_reward_the_earlier_arrival() -> None:
     state = np.zeros((2, dg.N_FIELDS), dtype=np.int64)
     state[:, dg.TIME] = (500, 550)
     out = np.empty(2)
-    dg.terminal_values(tb, state, out)
-    assert out[0] == pytest.approx(0.75) and out[1] == pytest.approx(0.25)
+    dg.terminal_values(tb, state, np.array([500.0, 550.0]), out)
+    # 0.5 s ahead with value_scale 1 s: 0.5 + 0.5 * 0.8 * 0.5; own pace equals the reference
+    assert out[0] == pytest.approx(0.7) and out[1] == pytest.approx(0.3)
+    dg.terminal_values(tb, state[:1], np.array([600.0]), out[:1])
+    assert out[0] == pytest.approx(0.5 + 0.5 * 1.0)  # alone, a full second faster than the reference

@@ -134,19 +134,27 @@ def apply_move(tb: GameTables, state: np.ndarray, p: int, action: int) -> bool:
     return True
 
 
+RACE_SHARE = 0.8  # share of the value range given to the time advantage over the others (the rest: own pace)
+
+
 @njit(cache=True)
-def terminal_values(tb: GameTables, state: np.ndarray, out: np.ndarray) -> None:
-    """Value in [0, 1] of a finished game for every player: 0.5 plus half its time advantage over the mean of
-    the others in units of ``value_scale``, clipped. A lone player has nobody to beat: its value falls with its
-    own time, ``1 - t / (t + 10 value_scale)``."""
+def terminal_values(tb: GameTables, state: np.ndarray, reference: np.ndarray, out: np.ndarray) -> None:
+    """Value in [0, 1] of a finished game for every player.
+
+    Mostly (``RACE_SHARE``) the time advantage over the mean of the others, in units of ``value_scale`` and
+    clipped (the paper's objective, eq. 1); the rest rewards the player's own pace against ``reference[p]``
+    (its time under the fast-move rollout policy from the root), so a player far ahead or alone still
+    prefers the faster plan instead of seeing every move as equal.
+    """
     n = state.shape[0]
-    if n == 1:
-        out[0] = 1.0 - state[0, TIME] / (state[0, TIME] + tb.value_scale * 10.0)
-        return
     total = 0
     for q in range(n):
         total += state[q, TIME]
     for p in range(n):
+        pace = min(max((reference[p] - state[p, TIME]) / tb.value_scale, -1.0), 1.0)
+        if n == 1:
+            out[p] = 0.5 + 0.5 * pace
+            continue
         others = (total - state[p, TIME]) / (n - 1)
-        v = 0.5 + 0.5 * (others - state[p, TIME]) / tb.value_scale
-        out[p] = min(max(v, 0.0), 1.0)
+        race = min(max((others - state[p, TIME]) / tb.value_scale, -1.0), 1.0)
+        out[p] = 0.5 + 0.5 * (RACE_SHARE * race + (1.0 - RACE_SHARE) * pace)

@@ -30,6 +30,22 @@ def _round_of(state: np.ndarray, start_round: int, final_round: int) -> int:
 
 
 @njit(cache=True)
+def _fastest_move(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins: int) -> int:
+    """The legal move with the earliest arrival (then the smaller lane change), or -1 if none."""
+    action, best_key = -1, 1 << 60
+    for lane in range(n_lanes):
+        # a higher arrival speed never arrives later, so the first legal bin from the top is this lane's fastest
+        for vbin in range(bins - 1, -1, -1):
+            arrival, _, ok = dg.move_outcome(tb, state, p, lane, vbin)
+            if ok:
+                key = arrival * 8 + abs(lane - state[p, dg.LANE])
+                if key < best_key:
+                    action, best_key = lane * bins + vbin, key
+                break
+    return action
+
+
+@njit(cache=True)
 def _rollout(
     tb: GameTables,
     state: np.ndarray,
@@ -37,6 +53,7 @@ def _rollout(
     final_round: int,
     greedy: float,
     moves: np.ndarray,
+    reference: np.ndarray,
     values: np.ndarray,
 ) -> None:
     """Play the game to the horizon from ``state`` (modified in place) and write every player's value.
@@ -55,17 +72,7 @@ def _rollout(
             continue
         action = -1
         if np.random.random() < greedy:
-            best_key = 1 << 60
-            for lane in range(n_lanes):
-                # a higher arrival speed never arrives later, so the first legal bin from the top is this
-                # lane's fastest move
-                for vbin in range(bins - 1, -1, -1):
-                    arrival, _, ok = dg.move_outcome(tb, state, p, lane, vbin)
-                    if ok:
-                        key = arrival * 8 + abs(lane - state[p, dg.LANE])
-                        if key < best_key:
-                            action, best_key = lane * bins + vbin, key
-                        break
+            action = _fastest_move(tb, state, p, n_lanes, bins)
         else:
             # rejection sampling is uniform over the legal moves and usually needs one or two draws
             for _ in range(REJECTION_TRIES):
@@ -84,7 +91,49 @@ def _rollout(
             values[p] = 0.0
             return
         dg.apply_move(tb, state, p, action)
-    dg.terminal_values(tb, state, values)
+    dg.terminal_values(tb, state, reference, values)
+
+
+@njit(cache=True)
+def greedy_line(tb: GameTables, state: np.ndarray, round_cp: int, final_round: int, out: np.ndarray) -> int:
+    """Continue ``state`` (in place) to the horizon with every player taking its fastest legal move.
+
+    Writes the moves as rows [player, action] into ``out`` and returns how many were played (it stops early
+    if a player is stuck).
+    """
+    bins = tb.bin_low.shape[0]
+    n_lanes = tb.distance.shape[1]
+    count = 0
+    r = _round_of(state, round_cp, final_round)
+    while r < final_round:
+        p = dg.next_player(state, r)
+        if p == dg.NO_PLAYER:
+            r += 1
+            continue
+        action = _fastest_move(tb, state, p, n_lanes, bins)
+        if action < 0:
+            return count
+        dg.apply_move(tb, state, p, action)
+        out[count, 0] = p
+        out[count, 1] = action
+        count += 1
+    return count
+
+
+@njit(cache=True)
+def reference_times(tb: GameTables, root_state: np.ndarray, horizon: int) -> np.ndarray:
+    """Every player's time at the horizon when all play the fastest legal move (the pace reference)."""
+    state = root_state.copy()
+    start = state[:, dg.CHECKPOINT].min()
+    moves = np.empty(tb.distance.shape[1] * tb.bin_low.shape[0], dtype=np.int64)
+    dummy = np.zeros(state.shape[0])
+    values = np.empty(state.shape[0])
+    _rollout(tb, state, start, start + horizon, 1.0, moves, dummy, values)
+    reference = np.empty(state.shape[0])
+    for p in range(state.shape[0]):
+        # a stuck greedy player keeps its last time; the reference then only ranks the others
+        reference[p] = state[p, dg.TIME]
+    return reference
 
 
 @njit(cache=True)
@@ -156,6 +205,7 @@ def search(
     moves = np.empty(tree_untried.shape[1], dtype=np.int64)
     values = np.empty(players)
     scratch = np.empty_like(root_state)
+    reference = reference_times(tb, root_state, horizon)
 
     if resume_nodes > 0:
         n_nodes = resume_nodes
@@ -226,7 +276,7 @@ def search(
             values[tree_mover[node]] = 0.0
         else:
             scratch[:, :] = tree_state[node]
-            _rollout(tb, scratch, tree_round[node], final_round, greedy, moves, values)
+            _rollout(tb, scratch, tree_round[node], final_round, greedy, moves, reference, values)
         # ---- backpropagation: each node is credited with the value of the player who moved into it
         while node != NO_NODE:
             tree_visits[node] += 1

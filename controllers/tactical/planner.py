@@ -10,13 +10,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from controllers.tactical import discrete as dg
+from controllers.tactical.discrete import apply_move
 from controllers.tactical.game import TIME_UNITS_PER_S, WEAR_UNITS, GameParams, GameTables, build_tables
-from controllers.tactical.mcts import SearchTree
+from controllers.tactical.mcts import SearchTree, greedy_line
 from sim_core.params import KartParams
 from sim_core.track import Track
 
 DEFAULT_EXPLORATION = 0.2  # UCT constant (values in [0, 1], value_scale 1 s): best measured on exact small games
-DEFAULT_GREEDY = 0.5  # probability that a rollout move is the fastest legal one
+DEFAULT_GREEDY = 0.8  # probability that a rollout move is the fastest legal one
 WALL_CLOCK_CHUNK = 250  # iterations between wall-clock checks when a time cap is set
 TREE_CAPACITY_PLANS = 8  # a reused tree grows for up to this many plans' budgets before it starts afresh
 
@@ -180,10 +181,19 @@ class TacticalPlanner:
         tb = self.tables
         bins = len(tb.bin_low)
         per_player: dict[int, list[Waypoint]] = {k: [] for k in karts}
-        for node in tree.principal_variation()[1:]:
-            mover = int(tree.mover[tree.parent[node]])
-            lane, vbin = divmod(int(tree.action[node]), bins)
-            state = tree.state[node, mover]
+        path = tree.principal_variation()
+        moves = [(int(tree.mover[tree.parent[node]]), int(tree.action[node]), tree.state[node]) for node in path[1:]]
+        # beyond the searched tree the plan continues with everyone's fastest legal moves
+        state = tree.state[path[-1]].copy()
+        tail = np.zeros((len(karts) * self.params.horizon, 2), dtype=np.int64)
+        played = greedy_line(tb, state, int(tree.round[path[-1]]), root_cp + self.params.horizon, tail)
+        replay = tree.state[path[-1]].copy()
+        for mover, action in tail[:played]:
+            apply_move(tb, replay, int(mover), int(action))
+            moves.append((int(mover), int(action), replay.copy()))
+        for mover, action, states in moves:
+            lane, vbin = divmod(action, bins)
+            state = states[mover]
             checkpoint = int(state[dg.CHECKPOINT])
             point = self.track.lane_point(checkpoint, lane + 1)
             per_player[karts[mover]].append(

@@ -1,0 +1,69 @@
+"""The controller interface: a small typed Protocol for drivers, and the parts hierarchical drivers are built
+from (a high-level planner that produces a :class:`~controllers.tactical.planner.Plan` and a tracker that
+follows it)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+from controllers.tactical.planner import Plan
+from sim_core.observation import Observation
+from sim_core.params import KartParams
+from sim_core.track import Track
+
+
+@dataclass(frozen=True)
+class Action:
+    """Driver inputs: steer in [-1, 1] (positive = left) and throttle in [-1, 1] (negative brakes)."""
+
+    steer: float
+    throttle: float
+
+
+@dataclass(frozen=True)
+class RaceContext:
+    """What a controller learns when a race starts."""
+
+    track: Track
+    kart: KartParams
+    ego: int  # index of the kart it drives
+    n_karts: int
+    lane_change_limit: int
+    seed: int
+
+
+@runtime_checkable
+class Controller(Protocol):
+    """A driver for one kart: reset once per race, then asked to act on every decision step."""
+
+    name: str
+    rate_hz: float  # decisions per second; the simulation holds the last action in between
+
+    def reset(self, context: RaceContext) -> None:
+        """Prepare for a new race."""
+
+    def act(self, observation: Observation) -> Action:
+        """The inputs for the next step(s)."""
+
+
+class HighLevelPlanner(Protocol):
+    """Produces waypoints (for the ego kart, and predictions for the others) from an observation."""
+
+    rate_hz: float
+
+    def reset(self, context: RaceContext) -> None:
+        """Prepare for a new race."""
+
+    def plan(self, observation: Observation) -> Plan:
+        """Waypoints from the state in ``observation``."""
+
+
+class Tracker(Protocol):
+    """Turns the current plan into inputs at the simulation rate."""
+
+    def reset(self, context: RaceContext) -> None:
+        """Prepare for a new race."""
+
+    def act(self, observation: Observation, plan: Plan | None) -> Action:
+        """Inputs that follow ``plan`` (or a sensible default without one)."""

@@ -1,0 +1,179 @@
+"""The LQNG tracker (paper eqs. 15-19): a linear-quadratic Nash game over a few 0.02 s steps, re-solved at
+every simulation step, that tracks the next waypoint while denying the opponents theirs and keeping apart.
+
+Each player's state is (x, y, v, dtheta) with dtheta the heading change from its current heading, so the
+dynamics linearised at the current state (eq. 19) are exact in their affine part: x' = x + dt (cos th0 v -
+v0 sin th0 dtheta), y' likewise, v' = v + dt a, dtheta' = dtheta + dt omega. Costs of player i (1/2 x'Qx + q'x):
+
+* eq. (15), own waypoint: w_pos |p_i - psi_i|^2 + w_v (v_i - psi_v)^2 + w_theta (dtheta_i - psi_theta)^2;
+* eq. (16), denial: - w_deny |p_j - psi_j|^2 for each opponent j with a predicted waypoint within reach;
+* eq. (17), separation: - w_avoid |p_i - p_j|^2 for each kart within ``avoid_radius``;
+* controls: 1/2 r |u_i|^2.
+
+The heading target points at a pure-pursuit aim point on the path that blends the kart's lateral offset
+into the next waypoints' lanes along the track (a heading straight at a lane point would cut the inside of
+bends). The tracker's acceleration and yaw rate are mapped to throttle and steer.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from controllers.base import Action, RaceContext
+from controllers.lq.nash import feedback_nash
+from controllers.tactical.planner import Plan, Waypoint
+from sim_core.observation import KartView, Observation
+from sim_core.params import DT
+from sim_core.track import Track
+
+
+@dataclass(frozen=True)
+class LQNGWeights:
+    """Weights of the tracker's game (defaults follow the original's magnitudes, spec section 5)."""
+
+    position: float = 0.93  # w_pos = position / max(1, v)
+    speed: float = 1.0  # w_v: pulls the speed to the planned speed
+    heading: float = 3.5  # w_theta (the original: 3.5 with MCTS, 1.9 with the fixed line)
+    # w_deny = deny / max(1, v) on the opponent's predicted waypoint; the original's 0.2 made the kart push the other
+    deny: float = 0.02
+    avoid_scale: float = 1.0  # w_avoid = 1 / (d^1.5 * avoid_scale) (the original: 1.0 MCTS, 0.45 fixed)
+    opponent_avoid_scale: float = 1.3  # the same for the opponents' assumed costs
+    control: float = 0.115  # r
+    avoid_radius: float = 8.0  # [m] players closer than this enter the game
+
+
+@dataclass(frozen=True)
+class LQNGParams:
+    """Tracker settings."""
+
+    horizon: int = 4  # steps of 0.02 s (the paper: 0.06-0.08 s)
+    lookahead_time: float = 0.45  # [s] pure-pursuit lookahead = max(min_lookahead, v * this)
+    min_lookahead: float = 3.0  # [m]
+    speed_margin: float = 1.0  # [m/s] added to planned speeds (the original added 2 bin widths)
+    braking_use: float = 0.8  # fraction of the braking limit the speed target assumes
+    weights: LQNGWeights = LQNGWeights()
+
+
+class LQNGTracker:
+    """Linear-quadratic Nash game tracker; works with any plan (MCTS waypoints or the fixed racing line)."""
+
+    def __init__(self, params: LQNGParams | None = None) -> None:
+        self.params = params or LQNGParams()
+        self._context: RaceContext | None = None
+        self.last_solve_ms = 0.0
+
+    def reset(self, context: RaceContext) -> None:
+        """Remember the track and kart limits."""
+        self._context = context
+
+    # ------------------------------------------------------------------ targets
+    def _upcoming(self, track: Track, kart: KartView, plan: Plan | None, owner: int) -> tuple[Waypoint, Waypoint]:
+        """The next two waypoints of ``owner`` still ahead of ``kart`` (its current lane when none is planned)."""
+        ahead: list[Waypoint] = []
+        if plan is not None:
+            ahead = [w for w in plan.waypoints.get(owner, ()) if w.checkpoint > kart.checkpoints_passed]
+        while len(ahead) < 2:
+            checkpoint = kart.checkpoints_passed + 1 + len(ahead)
+            lane = ahead[-1].lane if ahead else kart.lane
+            point = track.lane_point(checkpoint, lane)
+            ahead.append(Waypoint(checkpoint, lane, (float(point[0]), float(point[1])), 15.0, 0.0))
+        return ahead[0], ahead[1]
+
+    def _aim(self, track: Track, kart: KartView, first: Waypoint, second: Waypoint) -> tuple[float, float]:
+        """Pure-pursuit aim point on the path blending the kart's lateral offset into the waypoints' lanes."""
+        p = self.params
+        lookahead = max(p.min_lookahead, abs(kart.speed) * p.lookahead_time)
+        n = track.n_checkpoints
+        s1 = (track.checkpoint_s[first.checkpoint % n] - kart.progress) % track.length
+        s2 = s1 + (track.checkpoint_s[second.checkpoint % n] - track.checkpoint_s[first.checkpoint % n]) % track.length
+        d1 = track.lane_offsets(first.checkpoint)[first.lane - 1]
+        d2 = track.lane_offsets(second.checkpoint)[second.lane - 1]
+        if lookahead <= s1:
+            d = kart.lateral + (d1 - kart.lateral) * lookahead / max(s1, 1e-6)
+        else:
+            d = d1 + (d2 - d1) * min((lookahead - s1) / max(s2 - s1, 1e-6), 1.0)
+        point, tangent = track.point_at(kart.progress + lookahead)
+        return float(point[0] - tangent[1] * d), float(point[1] + tangent[0] * d)
+
+    def _speed_target(self, kart: KartView, first: Waypoint, second: Waypoint, top: float, brake: float) -> float:
+        p = self.params
+        target = top
+        for w in (first, second):
+            dist = math.hypot(w.position[0] - kart.x, w.position[1] - kart.y)
+            allowed = math.sqrt((min(w.speed + p.speed_margin, top)) ** 2 + 2.0 * brake * p.braking_use * dist)
+            target = min(target, allowed)
+        return target
+
+    # ------------------------------------------------------------------ control
+    def act(self, observation: Observation, plan: Plan | None) -> Action:
+        """Solve the game at the current state and map the ego's first control to steer and throttle."""
+        assert self._context is not None, "reset() first"
+        ctx = self._context
+        track, kart = ctx.track, ctx.kart
+        w = self.params.weights
+        me = observation.me
+        others = [k for k in observation.others() if math.hypot(k.x - me.x, k.y - me.y) < w.avoid_radius]
+        players = [me, *others]
+        n = 4 * len(players)
+        A = np.eye(n)
+        B: list[np.ndarray] = []
+        x0 = np.zeros(n)
+        targets = []
+        for i, k in enumerate(players):
+            s = 4 * i
+            c, sn = math.cos(k.heading), math.sin(k.heading)
+            A[s, s + 2], A[s, s + 3] = c * DT, -k.speed * sn * DT
+            A[s + 1, s + 2], A[s + 1, s + 3] = sn * DT, k.speed * c * DT
+            Bi = np.zeros((n, 2))
+            Bi[s + 2, 0] = Bi[s + 3, 1] = DT
+            B.append(Bi)
+            # positions relative to the ego kart keep the numbers small
+            x0[s : s + 3] = (k.x - me.x, k.y - me.y, k.speed)
+            first, second = self._upcoming(track, k, plan, k.index)
+            ax, ay = self._aim(track, k, first, second)
+            heading_error = math.remainder(math.atan2(ay - k.y, ax - k.x) - k.heading, 2.0 * math.pi)
+            speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
+            targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))
+        Q = [np.zeros((n, n)) for _ in players]
+        q = [np.zeros(n) for _ in players]
+        for i, k in enumerate(players):
+            s = 4 * i
+            tx, ty, tv, th = targets[i]
+            w_pos = w.position / max(1.0, k.speed)
+            for idx, weight, target in (
+                (s, w_pos, tx),
+                (s + 1, w_pos, ty),
+                (s + 2, w.speed, tv),
+                (s + 3, w.heading, th),
+            ):
+                Q[i][idx, idx] += 2.0 * weight
+                q[i][idx] -= 2.0 * weight * target
+            scale = w.avoid_scale if i == 0 else w.opponent_avoid_scale
+            for j, other in enumerate(players):
+                if j == i:
+                    continue
+                o = 4 * j
+                dist = max(math.hypot(other.x - k.x, other.y - k.y), 0.5)
+                w_avoid = 1.0 / (dist**1.5 * scale)
+                for axis in (0, 1):
+                    a, b = s + axis, o + axis
+                    Q[i][a, a] -= 2.0 * w_avoid
+                    Q[i][b, b] -= 2.0 * w_avoid
+                    Q[i][a, b] += 2.0 * w_avoid
+                    Q[i][b, a] += 2.0 * w_avoid
+                if i == 0 and plan is not None and other.index in plan.waypoints:
+                    w_deny = w.deny / max(1.0, me.speed)
+                    ox, oy = targets[j][0], targets[j][1]
+                    for idx, target in ((o, ox), (o + 1, oy)):
+                        Q[i][idx, idx] -= 2.0 * w_deny
+                        q[i][idx] += 2.0 * w_deny * target
+        R = [w.control * np.eye(2) for _ in players]
+        P, alpha = feedback_nash(A, B, Q, q, R, self.params.horizon)
+        accel, yaw_rate = -(P[0][0:2] @ x0) - alpha[0][0:2]
+        throttle = accel / kart.acceleration if accel >= 0.0 else accel / kart.braking
+        speed = max(abs(me.speed), 1.0)
+        steer = math.atan(yaw_rate * kart.wheelbase / speed) / kart.max_steer_angle
+        return Action(float(np.clip(steer, -1.0, 1.0)), float(np.clip(throttle, -1.0, 1.0)))

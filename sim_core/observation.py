@@ -1,0 +1,92 @@
+"""What a controller sees: a frozen snapshot of every kart plus the ego kart's rays, taken from a World.
+
+Data flows one way: World -> Observation -> controller -> action -> World.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim_core import state as st
+from sim_core.world import World
+
+
+@dataclass(frozen=True)
+class KartView:
+    """One kart as observed: pose, speed, progress, and its state at the last checkpoint crossing."""
+
+    index: int
+    x: float  # [m]
+    y: float  # [m]
+    heading: float  # [rad]
+    speed: float  # [m/s]
+    progress: float  # [m] along the centre line within the lap
+    lateral: float  # [m] left-positive offset from the centre line
+    wear: float  # [-]
+    checkpoints_passed: int  # absolute count since the start
+    lane: int  # lane at the last crossing (1-based)
+    lane_changes: int  # eq. (9) counter
+    crossing_time: float  # [s] race time of the last crossing
+    crossing_speed: float  # [m/s]
+    crossing_wear: float  # [-]
+    finished: bool
+
+
+@dataclass(frozen=True)
+class Observation:
+    """Everything a controller may use for one decision of kart ``ego``."""
+
+    time: float  # [s] race time
+    ego: int
+    karts: tuple[KartView, ...]
+    ray_distances: np.ndarray  # (9,) [m]
+    ray_hits: np.ndarray  # (9,) sim_core.state.HIT_*
+
+    @property
+    def me(self) -> KartView:
+        """The ego kart."""
+        return self.karts[self.ego]
+
+    def others(self) -> tuple[KartView, ...]:
+        """Every other kart still racing."""
+        return tuple(k for k in self.karts if k.index != self.ego and not k.finished)
+
+
+def kart_views(world: World, race: int) -> tuple[KartView, ...]:
+    """Views of every kart of ``race``."""
+    views = []
+    for k in range(world.n_karts):
+        f = world.fstate[race, k]
+        i = world.istate[race, k]
+        views.append(
+            KartView(
+                index=k,
+                x=float(f[st.F_X]),
+                y=float(f[st.F_Y]),
+                heading=float(f[st.F_HEADING]),
+                speed=float(f[st.F_SPEED]),
+                progress=float(f[st.F_S]),
+                lateral=float(f[st.F_D]),
+                wear=float(f[st.F_WEAR]),
+                checkpoints_passed=int(i[st.I_CP_PASSED]),
+                lane=int(i[st.I_LANE]),
+                lane_changes=int(i[st.I_LANE_COUNT]),
+                crossing_time=float(f[st.F_CROSS_TIME]),
+                crossing_speed=float(f[st.F_CROSS_SPEED]),
+                crossing_wear=float(f[st.F_CROSS_WEAR]),
+                finished=bool(i[st.I_FINISHED]),
+            )
+        )
+    return tuple(views)
+
+
+def observe(world: World, race: int = 0) -> list[Observation]:
+    """One observation per kart of ``race`` (they share the kart views)."""
+    views = kart_views(world, race)
+    time = float(world.time[race])
+    return [
+        Observation(time, k, views, world.ray_dist[race, k].copy(), world.ray_hit[race, k].copy())
+        for k in range(world.n_karts)
+    ]
