@@ -18,7 +18,7 @@ $(STAMP): pyproject.toml
 setup: $(STAMP)
 
 run: setup  ## set up, then run a headless race on the paper's oval (the server replaces this in issue 5)
-	$(BIN)/karting race --track oval
+	$(BIN)/karting race --track oval --karts mcts-lqng,fixed-lqng
 
 test: setup  ## set up, then lint and run every test
 	$(BIN)/ruff check .

@@ -2,19 +2,14 @@
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
 
-from sim_core import state as st
-from sim_core.params import SimParams, kart_preset
 from sim_core.track_io import TrackFormatError, builtin_track_names, get_track, import_centreline_csv, save_track
-from sim_core.world import World
 
 app = typer.Typer(help="HeadToHead Karting: head-to-head autonomous kart racing with rules.", no_args_is_help=True)
 console = Console()
@@ -63,45 +58,37 @@ def import_track(
 @app.command()
 def race(
     track: Annotated[str, typer.Option(help="built-in track name, or a path to a track JSON")] = "oval",
-    karts: Annotated[int, typer.Option(min=1, max=8, help="number of karts")] = 2,
+    karts: Annotated[
+        str, typer.Option(help="comma-separated registered controllers, one per kart")
+    ] = "mcts-lqng,fixed-lqng",
     laps: Annotated[int | None, typer.Option(min=1, help="laps (default: the track's)")] = None,
+    seed: Annotated[int, typer.Option(help="seed of the planners")] = 0,
     start_lanes: Annotated[str | None, typer.Option(help="comma-separated start lanes, e.g. 2,3")] = None,
     kart: Annotated[str, typer.Option(help="kart preset: paper or original")] = "paper",
+    plan_latency: Annotated[float, typer.Option(min=0.0, help="[s] delay before a new plan applies")] = 0.1,
+    replay: Annotated[Path | None, typer.Option(help="write a JSON replay (poses, inputs, plans) here")] = None,
 ) -> None:
-    """Run a headless race of lane-following karts and print the referee's result.
+    """Run a headless race between registered controllers and print the referee's result."""
+    from controllers.race import RaceSpec, run_race  # controllers compose sim_core, not the reverse
+    from controllers.registry import controller_names
 
-    Until the controller registry exists every kart is the pure-pursuit lane follower, kart i following
-    its start lane.
-    """
-    from controllers.lane_follower import LaneFollower  # controllers compose sim_core, not the reverse
-
+    names = tuple(n.strip() for n in karts.split(",") if n.strip())
+    unknown = [n for n in names if n not in controller_names()]
+    if unknown or not 1 <= len(names) <= 8:
+        console.print(f"[red]error:[/red] give 1-8 of {controller_names()}, got {list(names)}")
+        raise typer.Exit(2)
     try:
-        the_track = _load(track)
-        params = SimParams(kart=kart_preset(kart))
-        lanes = [int(x) for x in start_lanes.split(",")] if start_lanes else None
-        world = World(the_track, 1, karts, params, laps=laps)
-        world.reset(start_lanes=lanes)
+        lanes = tuple(int(x) for x in start_lanes.split(",")) if start_lanes else None
+        spec = RaceSpec(track, names, laps, seed, lanes, kart, plan_latency)
+        outcome = run_race(spec, record=replay is not None)
     except (TrackFormatError, KeyError, ValueError) as exc:
         console.print(f"[red]error:[/red] {exc}")
         raise typer.Exit(2) from None
-    follower = LaneFollower(the_track, params.kart)
-    lateral = np.array([[world.fstate[0, k, st.F_D] for k in range(karts)]])
-    t0 = time.perf_counter()
-    while not world.done[0]:
-        actions = follower.act(
-            world.positions,
-            world.headings,
-            world.speeds,
-            world.fstate[:, :, st.F_S],
-            world.fstate[:, :, st.F_WEAR],
-            lateral,
-        )
-        world.step(actions)
-    wall = time.perf_counter() - t0
-    result = world.result(0)
-    table = Table(title=f"{the_track.name}, {world.laps} laps: {result.duration:.2f} s simulated in {wall:.2f} s")
+    result = outcome.result
+    table = Table(title=f"{track}: {result.duration:.2f} s simulated in {outcome.wall_seconds:.2f} s")
     for col in (
         "kart",
+        "driver",
         "pos",
         "time [s]",
         "laps",
@@ -109,7 +96,6 @@ def race(
         "illegal LC",
         "safety",
         "walls",
-        "buffer",
         "Δr [m]",
         "Δv [m/s]",
     ):
@@ -117,6 +103,7 @@ def race(
     for kr in sorted(result.karts, key=lambda r: r.position):
         table.add_row(
             str(kr.kart),
+            names[kr.kart],
             str(kr.position),
             f"{kr.finish_time:.2f}" if kr.finish_time is not None else "DNF",
             str(kr.laps_completed),
@@ -124,20 +111,15 @@ def race(
             str(kr.illegal_lane_changes),
             str(kr.safety_score),
             str(kr.wall_hits),
-            str(kr.buffer_violations),
             "-" if kr.delta_r is None else f"{kr.delta_r:.2f}",
             "-" if kr.delta_v is None else f"{kr.delta_v:.2f}",
         )
     console.print(table)
-    console.print(f"winner: {'kart ' + str(result.winner) if result.winner is not None else 'nobody (no finisher)'}")
-
-
-def _load(track: str):  # type: ignore[no-untyped-def]
-    from sim_core.track_io import load_track
-
-    if track.endswith(".json") or "/" in track:
-        return load_track(track)
-    return get_track(track)
+    winner = f"kart {result.winner} ({names[result.winner]})" if result.winner is not None else "nobody (no finisher)"
+    console.print(f"winner: {winner}")
+    if replay is not None and outcome.replay is not None:
+        outcome.replay.save(replay)
+        console.print(f"replay written to {replay}")
 
 
 if __name__ == "__main__":
