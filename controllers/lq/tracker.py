@@ -24,10 +24,18 @@ import numpy as np
 
 from controllers.base import Action, RaceContext
 from controllers.lq.nash import feedback_nash
+from controllers.racing_line import RacingLine, optimise_racing_line
 from controllers.tactical.planner import Plan, Waypoint
 from sim_core.observation import KartView, Observation
 from sim_core.params import DT
 from sim_core.track import Track
+
+LANE_TOLERANCE = 1.25  # [m] a waypoint lane within this of the racing line needs no correction
+
+
+def _lane_correction(lane_offset: float, line_offset: float) -> float:
+    gap = lane_offset - line_offset
+    return 0.0 if abs(gap) <= LANE_TOLERANCE else gap - math.copysign(LANE_TOLERANCE, gap)
 
 
 @dataclass(frozen=True)
@@ -63,11 +71,13 @@ class LQNGTracker:
     def __init__(self, params: LQNGParams | None = None) -> None:
         self.params = params or LQNGParams()
         self._context: RaceContext | None = None
-        self.last_solve_ms = 0.0
+        self._line: RacingLine | None = None
 
     def reset(self, context: RaceContext) -> None:
-        """Remember the track and kart limits."""
+        """Remember the track and kart limits and get the track's racing line (the shape followed between
+        waypoints that agree with it)."""
         self._context = context
+        self._line = optimise_racing_line(context.track, context.kart)
 
     # ------------------------------------------------------------------ targets
     def _upcoming(self, track: Track, kart: KartView, plan: Plan | None, owner: int) -> tuple[Waypoint, Waypoint]:
@@ -91,16 +101,28 @@ class LQNGTracker:
         s2 = s1 + (track.checkpoint_s[second.checkpoint % n] - track.checkpoint_s[first.checkpoint % n]) % track.length
         d1 = track.lane_offsets(first.checkpoint)[first.lane - 1]
         d2 = track.lane_offsets(second.checkpoint)[second.lane - 1]
+        # follow the racing line's shape, shifted where a waypoint's lane is away from it: the correction is
+        # the lane's offset from the line (0 when the line already passes within half a lane of it)
+        assert self._line is not None
+        line = self._line
+        aim_s = kart.progress + lookahead
+        c1 = _lane_correction(d1, float(line.offset_at(kart.progress + s1)))
+        c2 = _lane_correction(d2, float(line.offset_at(kart.progress + s2)))
+        c_now = kart.lateral - float(line.offset_at(kart.progress))
         if lookahead <= s1:
-            d = kart.lateral + (d1 - kart.lateral) * lookahead / max(s1, 1e-6)
+            correction = c_now + (c1 - c_now) * lookahead / max(s1, 1e-6)
         else:
-            d = d1 + (d2 - d1) * min((lookahead - s1) / max(s2 - s1, 1e-6), 1.0)
-        point, tangent = track.point_at(kart.progress + lookahead)
+            correction = c1 + (c2 - c1) * min((lookahead - s1) / max(s2 - s1, 1e-6), 1.0)
+        d = float(line.offset_at(aim_s)) + correction
+        point, tangent = track.point_at(aim_s)
         return float(point[0] - tangent[1] * d), float(point[1] + tangent[0] * d)
 
     def _speed_target(self, kart: KartView, first: Waypoint, second: Waypoint, top: float, brake: float) -> float:
         p = self.params
-        target = top
+        assert self._line is not None and self._context is not None
+        # never faster than the racing line's speed profile here (it already brakes for the corners ahead)
+        here = np.interp(kart.progress, self._line.s, self._line.speed, period=self._context.track.length)
+        target = min(top, float(here))
         for w in (first, second):
             dist = math.hypot(w.position[0] - kart.x, w.position[1] - kart.y)
             allowed = math.sqrt((min(w.speed + p.speed_margin, top)) ** 2 + 2.0 * brake * p.braking_use * dist)
