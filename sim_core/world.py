@@ -53,26 +53,6 @@ class RaceResult:
     done: bool
 
 
-@dataclass(frozen=True)
-class KartSnapshot:
-    """What an observer sees of one kart at one instant."""
-
-    x: float
-    y: float
-    heading: float
-    speed: float
-    yaw_rate: float
-    wear: float
-    progress: float  # [m] along the centre line within the lap
-    lateral: float  # [m] left-positive
-    checkpoints_passed: int
-    lane: int
-    lane_change_count: int
-    finished: bool
-    steer: float
-    throttle: float
-
-
 class World:
     """B races x K karts on one track. Construct, :meth:`reset`, then :meth:`step` with (B, K, 2) actions.
 
@@ -332,27 +312,6 @@ class World:
         since = np.mod(self.fstate[:, :, st.F_S] - track.checkpoint_s[last], track.length)
         laps_done = np.floor_divide(passed, n)
         return laps_done * track.length + track.checkpoint_s[last] + since
-
-    def kart_snapshot(self, race: int, kart: int) -> KartSnapshot:
-        """A copy of one kart's observable state."""
-        f = self.fstate[race, kart]
-        i = self.istate[race, kart]
-        return KartSnapshot(
-            x=float(f[st.F_X]),
-            y=float(f[st.F_Y]),
-            heading=float(f[st.F_HEADING]),
-            speed=float(f[st.F_SPEED]),
-            yaw_rate=float(f[st.F_YAW_RATE]),
-            wear=float(f[st.F_WEAR]),
-            progress=float(f[st.F_S]),
-            lateral=float(f[st.F_D]),
-            checkpoints_passed=int(i[st.I_CP_PASSED]),
-            lane=int(i[st.I_LANE]),
-            lane_change_count=int(i[st.I_LANE_COUNT]),
-            finished=bool(i[st.I_FINISHED]),
-            steer=float(f[st.F_STEER]),
-            throttle=float(f[st.F_THROTTLE]),
-        )
 
     def standings(self, race: int) -> list[int]:
         """Kart indices in race order: finishers by time, then the rest by progress."""
