@@ -138,6 +138,14 @@ class HierarchicalController:
         self._pending = _PendingPlan(plan, observation.time + self.plan_latency)
         return plan
 
+    def mark_plan_requested(self, time: float) -> None:
+        """Record that a plan was requested at race time ``time`` elsewhere (the live server's planner worker)."""
+        self._next_request = time + 1.0 / self.planner.rate_hz
+
+    def track(self, observation: Observation) -> Action:
+        """The tracker's inputs for the active plan, without planning (live sessions plan in a worker)."""
+        return self.tracker.act(observation, self.active_plan)
+
     def deliver(self, plan: Plan) -> None:
         """Make ``plan`` the active plan (the live server calls this when its worker finishes)."""
         self.active_plan = plan

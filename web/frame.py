@@ -1,0 +1,63 @@
+"""The live race state handed from a race session to its viewers: one immutable frame per tick.
+
+The server builds a :class:`RaceFrame` from the session's ``World`` and controllers every tick; the 3D scene
+(:mod:`web.scene`) and the telemetry websocket both consume it. Only plain numbers and strings, so a frame can
+be serialised with :func:`dataclasses.asdict` and compared in tests.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+# One colour per grid slot (RGB 0-255), shared by the 3D view and the pages.
+KART_COLORS: tuple[tuple[int, int, int], ...] = (
+    (230, 57, 70),  # red
+    (29, 114, 243),  # blue
+    (255, 183, 3),  # amber
+    (42, 157, 143),  # teal
+    (155, 93, 229),  # violet
+    (244, 132, 95),  # coral
+    (96, 108, 56),  # olive
+    (33, 33, 33),  # black
+)
+
+
+@dataclass(frozen=True)
+class KartFrame:
+    """One kart at one tick, with its standing, safety counts and the waypoints its planner last delivered."""
+
+    index: int
+    name: str  # display name
+    controller: str  # registered controller name, or "human"
+    x: float  # [m]
+    y: float  # [m]
+    heading: float  # [rad]
+    speed: float  # [m/s]
+    steer: float  # last applied input in [-1, 1]
+    throttle: float  # last applied input in [-1, 1]
+    lap: int  # current lap, 1-based (laps completed + 1, capped at the race's laps)
+    position: int  # 1-based running order
+    checkpoints_passed: int
+    lane: int  # lane at the last checkpoint crossing (1-based)
+    collisions_at_fault: int
+    illegal_lane_changes: int
+    wall_hits: int
+    finished: bool
+    finish_time: float | None  # [s]
+    controller_faults: int  # exceptions, hangs and missed deadlines of its driver
+    waypoints: tuple[tuple[float, float], ...] = ()  # the ego plan's waypoint positions (drawn green)
+    predicted: tuple[tuple[float, float], ...] = ()  # its planner's predictions of the other karts' waypoints
+
+
+@dataclass(frozen=True)
+class RaceFrame:
+    """A whole race at one tick."""
+
+    race_id: str
+    track: str
+    time: float  # [s] race time
+    step: int
+    laps: int
+    status: str  # "running" | "finished" | "stopped"
+    karts: tuple[KartFrame, ...]
+    plans_version: int  # changes whenever any kart's waypoints change (viewers redraw plans only then)
