@@ -1,0 +1,81 @@
+// Shared helpers of the pages (no framework, no external requests).
+"use strict";
+
+// One colour per grid slot, as web/frame.py KART_COLORS.
+const KART_COLORS = [
+  [230, 57, 70], [29, 114, 243], [255, 183, 3], [42, 157, 143],
+  [155, 93, 229], [244, 132, 95], [96, 108, 56], [33, 33, 33],
+];
+
+function kartColor(i) {
+  const c = KART_COLORS[((i % KART_COLORS.length) + KART_COLORS.length) % KART_COLORS.length];
+  return `rgb(${c[0]}, ${c[1]}, ${c[2]})`;
+}
+
+// Build an element: el("a", {href: "/x", class: "y"}, "text", child, ...).
+function el(tag, attrs, ...children) {
+  const node = document.createElement(tag);
+  for (const [key, value] of Object.entries(attrs || {})) {
+    if (value === undefined || value === null || value === false) continue;
+    if (key === "class") node.className = value;
+    else if (key.startsWith("on") && typeof value === "function") node.addEventListener(key.slice(2), value);
+    else node.setAttribute(key, value === true ? "" : String(value));
+  }
+  for (const child of children.flat()) {
+    if (child === undefined || child === null || child === false) continue;
+    node.append(child instanceof Node ? child : document.createTextNode(String(child)));
+  }
+  return node;
+}
+
+function swatch(i) {
+  return el("span", {class: "swatch", style: `background: ${kartColor(i)}`});
+}
+
+// A readable message from an error response body (FastAPI 422 details included).
+function describeError(status, body) {
+  if (body && typeof body === "object") {
+    const detail = body.detail !== undefined ? body.detail : body.error !== undefined ? body.error : body.message;
+    if (Array.isArray(detail)) {
+      return detail.map((d) => {
+        if (d && typeof d === "object") {
+          const loc = Array.isArray(d.loc) ? d.loc.filter((p) => p !== "body").join(" → ") : "";
+          return (loc ? loc + ": " : "") + (d.msg || JSON.stringify(d));
+        }
+        return String(d);
+      }).join("\n");
+    }
+    if (detail && typeof detail === "object") return JSON.stringify(detail);
+    if (detail !== undefined) return String(detail);
+    return JSON.stringify(body);
+  }
+  return body ? String(body) : `HTTP ${status}`;
+}
+
+// fetch JSON; throws Error(message) with the server's explanation on failure.
+async function fetchJSON(url, options) {
+  const response = await fetch(url, Object.assign({headers: {"Accept": "application/json"}}, options || {}));
+  const text = await response.text();
+  let body = null;
+  try { body = text ? JSON.parse(text) : null; } catch (_) { body = text; }
+  if (!response.ok) {
+    const error = new Error(`${response.status}: ${describeError(response.status, body)}`);
+    error.status = response.status;
+    error.body = body;
+    throw error;
+  }
+  return body;
+}
+
+// The list inside a response that is either a list or an object holding one ({races: [...]}, {items: [...]}).
+function listOf(body, key) {
+  if (Array.isArray(body)) return body;
+  if (body && typeof body === "object") {
+    for (const k of [key, "items", "data", "results"]) if (Array.isArray(body[k])) return body[k];
+  }
+  return [];
+}
+
+function fmtNumber(value, digits) {
+  return typeof value === "number" && isFinite(value) ? value.toFixed(digits) : "–";
+}
