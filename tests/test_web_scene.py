@@ -1,0 +1,387 @@
+"""The race scene and the viewer relay, without a browser: viser's wire protocol decoded from a websocket client.
+
+Each viser websocket frame is ``u64 len(msgpack) | u64 len(zstd) | zstd(msgpack {"messages": [...]}) | binary
+buffers``; the tests decode the messages and look at their types, node names and props.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import socket
+import threading
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import httpx
+import msgspec
+import numpy as np
+import pytest
+import uvicorn
+import viser
+import websockets
+import zstandard
+from fastapi import FastAPI
+from websockets.exceptions import ConnectionClosed
+from websockets.typing import Subprotocol
+
+from sim_core.track import Track
+from sim_core.track_io import get_track
+from web.frame import KartFrame, RaceFrame
+from web.routes import make_web_router
+from web.scene import CHECKPOINT_COLOR, PREDICTION_COLOR, WAYPOINT_COLOR, WAYPOINT_POOL, RaceScene
+from web.viewer import VISER_SUBPROTOCOL
+
+SUBPROTOCOL = Subprotocol(f"viser-v{viser.__version__}")
+Message = dict[str, Any]
+
+
+# ---------------------------------------------------------------------------------------------- helpers
+def decode_frame(data: bytes) -> list[Message]:
+    """The messages of one viser websocket frame."""
+    inner_size = int.from_bytes(data[:8], "little")
+    compressed_size = int.from_bytes(data[8:16], "little")
+    inner = zstandard.ZstdDecompressor().decompress(data[16 : 16 + compressed_size], max_output_size=inner_size)
+    return list(msgspec.msgpack.decode(inner)["messages"])
+
+
+async def receive_until(
+    ws: websockets.ClientConnection, done: Callable[[list[Message]], bool], timeout: float = 10.0
+) -> list[Message]:
+    """Collect messages until ``done(all so far)`` holds (or fail after ``timeout`` seconds)."""
+    messages: list[Message] = []
+    deadline = time.monotonic() + timeout
+    while not done(messages):
+        remaining = deadline - time.monotonic()
+        assert remaining > 0, f"timed out; got {sorted({m['type'] for m in messages})}"
+        data = await asyncio.wait_for(ws.recv(), remaining)
+        assert isinstance(data, bytes)
+        messages.extend(decode_frame(data))
+    return messages
+
+
+def replay_done(messages: list[Message]) -> bool:
+    """Whether viser finished sending its scene backlog."""
+    return any(m["type"] == "ReplayDoneMessage" for m in messages)
+
+
+def named(messages: list[Message], kind: str) -> dict[str, Message]:
+    """Last message of type ``kind`` per node name."""
+    return {m["name"]: m for m in messages if m["type"] == kind}
+
+
+def make_frame(
+    track: Track,
+    n_karts: int,
+    *,
+    step: int = 0,
+    plans_version: int = 0,
+    moved: float = 0.0,
+    waypoints: tuple[tuple[float, float], ...] = (),
+    predicted: tuple[tuple[float, float], ...] = (),
+    status: str = "running",
+) -> RaceFrame:
+    """A frame with karts on the grid (kart 0 ``moved`` metres along x) and kart 0's plan."""
+    karts = []
+    for i in range(n_karts):
+        point = track.lane_point(0, 1 + i % track.n_lanes)
+        karts.append(
+            KartFrame(
+                index=i,
+                name=f"Driver {i}",
+                controller="fixed-lqng",
+                x=float(point[0]) + (moved if i == 0 else 0.0),
+                y=float(point[1]),
+                heading=0.3 * i,
+                speed=5.0 + i,
+                steer=0.0,
+                throttle=1.0,
+                lap=1,
+                position=i + 1,
+                checkpoints_passed=0,
+                lane=1 + i % track.n_lanes,
+                collisions_at_fault=i,
+                illegal_lane_changes=0,
+                wall_hits=0,
+                finished=False,
+                finish_time=None,
+                controller_faults=0,
+                waypoints=waypoints if i == 0 else (),
+                predicted=predicted if i == 0 else (),
+            )
+        )
+    return RaceFrame("r1", track.name, step * 0.02, step, track.laps, status, tuple(karts), plans_version)
+
+
+@pytest.fixture(params=["oval", "complex"])
+def scene(request: pytest.FixtureRequest) -> Iterator[RaceScene]:
+    track = get_track(request.param)
+    race_scene = RaceScene(track, [("Driver 0", "mcts-lqng"), ("Driver 1", "fixed-lqng")], f"test {request.param}")
+    yield race_scene
+    race_scene.close()
+
+
+def connect(port: int, path: str = "", subprotocol: str = SUBPROTOCOL) -> Any:
+    return websockets.connect(
+        f"ws://127.0.0.1:{port}{path}", subprotocols=[Subprotocol(subprotocol)], max_size=None, compression=None
+    )
+
+
+# ---------------------------------------------------------------------------------------------- scene
+def test_viser_wire_decoders_available() -> None:
+    assert VISER_SUBPROTOCOL == SUBPROTOCOL
+    assert zstandard.ZstdDecompressor and msgspec.msgpack.decode
+
+
+def test_scene_has_track_karts_checkpoints_and_plan_nodes(scene: RaceScene) -> None:
+    track = scene.track
+
+    async def run() -> list[Message]:
+        async with connect(scene.port) as ws:
+            assert ws.subprotocol == SUBPROTOCOL
+            return await receive_until(ws, replay_done)
+
+    messages = asyncio.run(run())
+    boxes = named(messages, "BoxMessage")
+    for i in range(2):
+        assert boxes[f"/karts/kart{i}"]["props"]["dimensions"] == pytest.approx((2.0, 0.9, 0.5))
+        for j in range(WAYPOINT_POOL):
+            assert tuple(boxes[f"/plans/kart{i}/wp{j}"]["props"]["color"]) == WAYPOINT_COLOR
+        assert tuple(boxes[f"/plans/kart{i}/pred0"]["props"]["color"]) == PREDICTION_COLOR
+    assert tuple(boxes["/karts/kart0"]["props"]["color"]) != tuple(boxes["/karts/kart1"]["props"]["color"])
+    checkpoints = [name for name in boxes if name.startswith("/track/checkpoints/")]
+    assert len(checkpoints) == track.n_checkpoints
+    assert all(tuple(boxes[name]["props"]["color"]) == CHECKPOINT_COLOR for name in checkpoints)
+    # checkpoint boxes sit on the checkpoint lines, across the road
+    positions = named(messages, "SetPositionMessage")
+    for c in (0, track.n_checkpoints // 2):
+        centre, _ = track.checkpoint_frame(c)
+        xyz = positions[f"/track/checkpoints/cp{c}"]["position"]
+        assert np.hypot(xyz[0] - centre[0], xyz[1] - centre[1]) < 1.0
+        assert boxes[f"/track/checkpoints/cp{c}"]["props"]["dimensions"][1] > 8.0
+    assert "/track/lanes" in named(messages, "LineSegmentsMessage")
+    meshes = named(messages, "MeshMessage")
+    assert {"/track/surface", "/track/walls/left", "/track/walls/right"} <= set(meshes)
+    labels = named(messages, "LabelMessage")
+    assert "Driver 0" in labels["/karts/kart0/label"]["props"]["text"]
+    assert "Driver 1" in labels["/karts/kart1/label"]["props"]["text"]
+    # plan boxes start hidden; karts are visible
+    visible = {name: m["visible"] for name, m in named(messages, "SetSceneNodeVisibilityMessage").items()}
+    assert visible["/plans/kart0/wp0"] is False and visible["/plans/kart1/pred0"] is False
+    assert visible["/karts/kart0"] is True
+    theme = next(m for m in messages if m["type"] == "ThemeConfigurationMessage")
+    assert theme["show_share_button"] is False
+    hud = [m for m in messages if m["type"] == "GuiMarkdownMessage"]
+    assert any("Driver 0" in m["props"]["_markdown"] for m in hud)
+
+
+def test_updates_move_karts_and_show_plans(scene: RaceScene) -> None:
+    track = scene.track
+    wp = tuple((float(p[0]), float(p[1])) for p in (track.lane_point(c, 2) for c in range(1, 4)))
+    pred = tuple((float(p[0]), float(p[1])) for p in (track.lane_point(c, 3) for c in range(1, 3)))
+
+    async def run() -> tuple[list[Message], list[Message], list[Message]]:
+        async with connect(scene.port) as ws:
+            await receive_until(ws, replay_done)
+            start = make_frame(track, 2)
+            scene.update(start)
+            first = await receive_until(ws, lambda ms: "/karts/kart0" in named(ms, "SetPositionMessage"))
+            scene.update(make_frame(track, 2, step=1, moved=1.5, plans_version=1, waypoints=wp, predicted=pred))
+
+            def plan_shown(ms: list[Message]) -> bool:
+                vis = named(ms, "SetSceneNodeVisibilityMessage")
+                return "/plans/kart0/wp2" in vis and "/karts/kart0" in named(ms, "SetPositionMessage")
+
+            second = await receive_until(ws, plan_shown)
+            # same plans_version: the plan is not re-sent even if the frame's waypoints differ
+            scene.update(make_frame(track, 2, step=2, moved=3.0, plans_version=1, waypoints=wp[:1]))
+            third = await receive_until(ws, lambda ms: "/karts/kart0" in named(ms, "SetPositionMessage"))
+            return first, second, third
+
+    first, second, third = asyncio.run(run())
+    x0 = named(first, "SetPositionMessage")["/karts/kart0"]["position"][0]
+    x1 = named(second, "SetPositionMessage")["/karts/kart0"]["position"][0]
+    assert x1 - x0 == pytest.approx(1.5, abs=1e-6)
+    assert "/karts/kart1" not in named(second, "SetPositionMessage")  # unchanged poses are not re-sent
+    visible = {name: m["visible"] for name, m in named(second, "SetSceneNodeVisibilityMessage").items()}
+    assert all(visible[f"/plans/kart0/wp{j}"] for j in range(3))
+    assert visible["/plans/kart0/pred0"] and visible["/plans/kart0/pred1"]
+    assert not visible.get("/plans/kart0/wp3", False)
+    positions = named(second, "SetPositionMessage")
+    assert positions["/plans/kart0/wp1"]["position"][:2] == pytest.approx(wp[1])
+    assert positions["/plans/kart0/pred1"]["position"][:2] == pytest.approx(pred[1])
+    assert not any(m.get("name", "").startswith("/plans/") for m in third)
+    assert named(third, "SetPositionMessage")["/karts/kart0"]["position"][0] == pytest.approx(x0 + 3.0)
+
+
+def test_update_never_raises_and_close_is_idempotent(caplog: pytest.LogCaptureFixture) -> None:
+    track = get_track("oval")
+    scene = RaceScene(track, [("A", "human"), ("B", "fixed-lqng")], "broken frames")
+    port = scene.port
+    assert scene._kart_writers[0].fast  # the fast pose path matches this viser version
+    with caplog.at_level(logging.ERROR, logger="web.scene"):
+        scene.update(None)  # type: ignore[arg-type]
+        scene.update(make_frame(track, 4))  # more karts than the scene has: extra ones ignored
+        bad = make_frame(track, 2)
+        scene.update(RaceFrame(**{**bad.__dict__, "karts": (*bad.karts[:1], "not a kart")}))  # type: ignore[arg-type]
+    assert any("update failed" in r.getMessage() for r in caplog.records)
+    scene.close()
+    scene.close()
+    scene.update(make_frame(track, 2))  # after close: a no-op
+    assert scene.closed
+    with socket.socket() as s:  # the port is free again
+        s.bind(("127.0.0.1", port))
+
+
+# ---------------------------------------------------------------------------------------------- relay
+class ServerThread:
+    """uvicorn serving ``app`` on a free local port from a background thread."""
+
+    def __init__(self, app: FastAPI) -> None:
+        config = uvicorn.Config(
+            app, host="127.0.0.1", port=0, log_level="warning", ws_per_message_deflate=False, lifespan="off"
+        )
+        self.server = uvicorn.Server(config)
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self.thread = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self) -> None:
+        self.loop = asyncio.new_event_loop()
+        self.loop.run_until_complete(self.server.serve())
+
+    def __enter__(self) -> ServerThread:
+        self.thread.start()
+        deadline = time.monotonic() + 10
+        while not self.server.started:
+            assert time.monotonic() < deadline and self.thread.is_alive(), "uvicorn did not start"
+            time.sleep(0.01)
+        self.port = int(self.server.servers[0].sockets[0].getsockname()[1])
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.server.should_exit = True
+        self.thread.join(10)
+
+    def task_names(self) -> set[str]:
+        """Names of the tasks now alive on the server's loop."""
+        assert self.loop is not None
+
+        async def names() -> set[str]:
+            return {t.get_name() for t in asyncio.all_tasks() if t is not asyncio.current_task()}
+
+        return asyncio.run_coroutine_threadsafe(names(), self.loop).result(5)
+
+
+@pytest.fixture()
+def relay_app() -> Iterator[tuple[ServerThread, RaceScene]]:
+    scene = RaceScene(get_track("oval"), [("A", "mcts-lqng"), ("B", "human")], "relay test")
+    scenes = {"r1": scene}
+
+    def scene_port(race_id: str) -> int | None:
+        s = scenes.get(race_id)
+        return None if s is None or s.closed else s.port
+
+    app = FastAPI()
+    app.include_router(make_web_router(scene_port))
+    with ServerThread(app) as server:
+        yield server, scene
+    scene.close()
+
+
+def test_pages(relay_app: tuple[ServerThread, RaceScene]) -> None:
+    server, _ = relay_app
+    with httpx.Client(base_url=f"http://127.0.0.1:{server.port}", timeout=10) as client:
+        start = client.get("/")
+        assert start.status_code == 200 and start.headers["content-type"].startswith("text/html")
+        assert "HeadToHead Karting" in start.text and "/assets/start.js" in start.text
+        for asset, kind in (("start.js", "javascript"), ("drive.js", "javascript"), ("style.css", "css")):
+            response = client.get(f"/assets/{asset}")
+            assert response.status_code == 200 and kind in response.headers["content-type"]
+        assert client.get("/assets/nope.js").status_code == 404
+        assert client.get("/assets/..%2Froutes.py").status_code == 404
+        viewer = client.get("/races/r1/viewer/")
+        assert viewer.status_code == 200 and viewer.headers["content-type"].startswith("text/html")
+        assert viewer.headers.get("content-encoding") == "gzip"  # httpx asks for gzip and decodes it
+        assert len(viewer.content) > 100_000 and b"<html" in viewer.content[:2000].lower()
+        plain = client.get("/races/r1/viewer/", headers={"Accept-Encoding": "identity"})
+        assert plain.content == viewer.content
+        redirect = client.get("/races/r1/viewer", follow_redirects=False)
+        assert redirect.status_code in (301, 302, 307, 308)
+        assert redirect.headers["location"].endswith("/races/r1/viewer/")
+        missing = client.get("/races/nope/viewer/")
+        assert missing.status_code == 404 and "nope" in missing.text
+        drive = client.get("/races/r1/drive", params={"kart": 1, "token": "t"})
+        assert drive.status_code == 200 and "/assets/drive.js" in drive.text
+
+
+def test_relay_unknown_race_closes_4404(relay_app: tuple[ServerThread, RaceScene]) -> None:
+    server, _ = relay_app
+
+    async def run() -> ConnectionClosed:
+        async with connect(server.port, "/races/nope/viewer") as ws:
+            with pytest.raises(ConnectionClosed) as closed:
+                await asyncio.wait_for(ws.recv(), 5)
+            return closed.value
+
+    closed = asyncio.run(run())
+    assert closed.rcvd is not None and closed.rcvd.code == 4404
+    assert "nope" in closed.rcvd.reason
+
+
+def test_relay_forwards_viser_both_ways_and_cleans_up(
+    relay_app: tuple[ServerThread, RaceScene], caplog: pytest.LogCaptureFixture
+) -> None:
+    server, scene = relay_app
+    track = scene.track
+
+    async def run() -> tuple[list[Message], list[Message]]:
+        async with connect(server.port, "/races/r1/viewer") as ws:
+            assert ws.subprotocol == SUBPROTOCOL
+            backlog = await receive_until(ws, replay_done)
+            scene.update(make_frame(track, 2, moved=2.0))
+            update = await receive_until(ws, lambda ms: "/karts/kart0" in named(ms, "SetPositionMessage"))
+            assert any(name.startswith("viewer-relay") for name in server.task_names())
+            return backlog, update
+
+    with caplog.at_level(logging.INFO):
+        backlog, update = asyncio.run(run())
+        assert "/karts/kart0" in named(backlog, "BoxMessage")
+        expected_x = float(track.lane_point(0, 1)[0]) + 2.0
+        assert named(update, "SetPositionMessage")["/karts/kart0"]["position"][0] == pytest.approx(expected_x)
+        deadline = time.monotonic() + 5
+        while any(name.startswith("viewer-relay") for name in server.task_names()):
+            assert time.monotonic() < deadline, "relay tasks leaked after the browser left"
+            time.sleep(0.05)
+    problems = [r for r in caplog.records if r.levelno >= logging.WARNING]
+    assert not problems, [r.getMessage() for r in problems]
+
+
+def test_relay_passes_version_mismatch_and_scene_close(relay_app: tuple[ServerThread, RaceScene]) -> None:
+    server, scene = relay_app
+
+    async def mismatch() -> ConnectionClosed:
+        async with connect(server.port, "/races/r1/viewer", subprotocol="viser-v0.0.1") as ws:
+            with pytest.raises(ConnectionClosed) as closed:
+                while True:
+                    await asyncio.wait_for(ws.recv(), 5)
+            return closed.value
+
+    closed = asyncio.run(mismatch())
+    assert closed.rcvd is not None and closed.rcvd.code == 1002
+
+    async def scene_closes() -> ConnectionClosed:
+        async with connect(server.port, "/races/r1/viewer") as ws:
+            await receive_until(ws, replay_done)
+            await asyncio.to_thread(scene.close)
+            with pytest.raises(ConnectionClosed) as closed:
+                while True:
+                    await asyncio.wait_for(ws.recv(), 10)
+            return closed.value
+
+    closed = asyncio.run(scene_closes())
+    assert closed.rcvd is not None and closed.rcvd.code in (1000, 1001)
+    deadline = time.monotonic() + 5
+    while any(name.startswith("viewer-relay") for name in server.task_names()):
+        assert time.monotonic() < deadline, "relay tasks leaked after viser stopped"
+        time.sleep(0.05)
