@@ -122,5 +122,30 @@ def race(
         console.print(f"replay written to {replay}")
 
 
+@app.command()
+def serve(
+    host: Annotated[str | None, typer.Option(help="interface to listen on (default 127.0.0.1, KARTING_HOST)")] = None,
+    port: Annotated[int | None, typer.Option(min=0, max=65535, help="port (default 8000, KARTING_PORT)")] = None,
+    db: Annotated[
+        str | None, typer.Option(help="SQLite file or database URL (default ./karting.db, KARTING_DATABASE_URL)")
+    ] = None,
+    no_viewer: Annotated[bool, typer.Option("--no-viewer", help="run without the 3D view")] = False,
+) -> None:
+    """Run the race server (REST API, websockets, live 3D view) until Ctrl-C."""
+    from server.app import serve as run_server  # the server composes sim_core, not the reverse: imported only here
+    from server.settings import Settings
+
+    overrides: dict[str, object] = {}
+    if host is not None:
+        overrides["host"] = host
+    if port is not None:
+        overrides["port"] = port
+    if db is not None:
+        overrides["database_url"] = db if "://" in db else f"sqlite:///{db}"
+    if no_viewer:
+        overrides["viewer_enabled"] = False
+    run_server(Settings(**overrides))  # type: ignore[arg-type]
+
+
 if __name__ == "__main__":
     app()

@@ -1,0 +1,135 @@
+"""The race server application: :func:`create_app` builds the FastAPI app, its lifespan starts what races share.
+
+Run it with ``karting serve`` (one uvicorn worker: races live in this process's memory).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import sys
+from collections.abc import AsyncIterator, Callable, Mapping
+from contextlib import asynccontextmanager
+
+from fastapi import APIRouter, FastAPI
+
+from controllers.registry import REGISTRY, ControllerSpec
+from server import api, ws
+from server.db import RaceDatabase
+from server.drivers import HUMAN, KartDriver
+from server.live import LiveRaces
+from server.planning import PlannerPool
+from server.session import SceneFactory
+from server.settings import Settings
+
+log = logging.getLogger(__name__)
+
+DESCRIPTION = """Head-to-head kart races between registered controllers and people, at 50 Hz.
+
+* REST under `/api` (this page).
+* Websockets: `/api/races/{id}/drive?kart=K&token=T` (drive a human kart) and `/api/races/{id}/telemetry`
+  (the race's frames at about 25 Hz); their messages are described in `server/ws.py`.
+* The 3D view of a race: `/races/{id}/viewer/`.
+"""
+
+
+def _scene_factory(settings: Settings) -> SceneFactory | None:
+    if not settings.viewer_enabled:
+        return None
+    try:
+        from web.scene import RaceScene
+    except ImportError as exc:
+        log.warning("no 3D view: web.scene is not available (%s)", exc)
+        return None
+    return RaceScene  # type: ignore[no-any-return]
+
+
+def _web_router(races: Callable[[], LiveRaces]) -> APIRouter | None:
+    try:
+        from web.routes import make_web_router
+    except ImportError as exc:
+        log.warning("no web pages: web.routes is not available (%s)", exc)
+        return None
+    router: APIRouter = make_web_router(lambda race_id: races().scene_port(race_id))
+    return router
+
+
+def warm_tick_path(catalogue: Mapping[str, ControllerSpec]) -> None:
+    """Load the compiled kernels the tick uses (world step, sensors, trackers) before the first race."""
+    from controllers.base import RaceContext
+    from sim_core.observation import observe
+    from sim_core.params import SimParams
+    from sim_core.track_io import get_track
+    from sim_core.world import World
+
+    track = get_track("oval")
+    params = SimParams()
+    world = World(track, 1, 2, params, laps=1)
+    world.step()
+    observation = observe(world, 0)[0]
+    for name, spec in catalogue.items():
+        if REGISTRY.get(name) is not spec:
+            continue  # only the public registry's controllers are known to be safe to try here
+        driver = KartDriver(0, name, name, spec.factory(), None)
+        try:
+            driver.reset(RaceContext(track, params.kart, 0, 2, world.lane_change_limit, 0))
+            driver.compute(observation)
+        except Exception:
+            log.exception("warming up %s failed", name)
+
+
+def create_app(settings: Settings | None = None, *, controllers: Mapping[str, ControllerSpec] | None = None) -> FastAPI:
+    """The race server. ``controllers`` replaces the public registry (tests add faulty drivers this way)."""
+    settings = settings or Settings()
+    catalogue = dict(REGISTRY if controllers is None else controllers)
+    if HUMAN in catalogue:
+        raise ValueError(f"{HUMAN!r} is reserved for human karts")
+    scene_factory = _scene_factory(settings)
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        switch_interval = sys.getswitchinterval()
+        # the tick task waits at most this long for a controller thread to give up the GIL
+        sys.setswitchinterval(settings.switch_interval_s)
+        db = await asyncio.to_thread(RaceDatabase, settings.database_url)
+        aborted = await asyncio.to_thread(db.abort_unfinished)
+        if aborted:
+            log.warning("%d race(s) left running by a previous server marked aborted", aborted)
+        pool = PlannerPool(settings.plan_workers)
+        races = LiveRaces(settings, catalogue, pool, db, scene_factory)
+        app.state.races = races
+        try:
+            await asyncio.gather(pool.wait_warm(), asyncio.to_thread(warm_tick_path, catalogue))
+            yield
+        finally:
+            await races.shutdown()
+            await asyncio.to_thread(pool.shutdown)
+            db.close()
+            sys.setswitchinterval(switch_interval)
+
+    app = FastAPI(title="HeadToHead Karting", description=DESCRIPTION, version="0.1.0", lifespan=lifespan)
+    app.state.settings = settings
+    app.include_router(api.router)
+    app.include_router(ws.router)
+    web = _web_router(lambda: app.state.races)
+    if web is not None:
+        app.include_router(web)
+    return app
+
+
+def serve(settings: Settings) -> None:
+    """Run the server with uvicorn until interrupted: one worker (races live in this process), no websocket
+    compression (viewer frames are already compressed), timers to the microsecond (:mod:`server.loop`)."""
+    import uvicorn
+
+    shown = "localhost" if settings.host in ("127.0.0.1", "0.0.0.0", "::") else settings.host
+    print(f"HeadToHead Karting server: open http://{shown}:{settings.port}/ (API docs at /docs)", flush=True)
+    uvicorn.run(
+        create_app(settings),
+        host=settings.host,
+        port=settings.port,
+        workers=1,
+        ws_per_message_deflate=False,
+        loop="server.loop:new_precise_loop",
+        log_level="info",
+    )

@@ -1,0 +1,200 @@
+"""The drivers of a live race: per kart an AI controller or a human on the drive websocket, and the thread
+that runs the AI controllers off the tick task.
+
+The tick task never waits for a controller. Each tick it hands the newest observations to the race's
+:class:`DriverThread` and reads the newest inputs the thread has finished (one tick of latency). A kart whose
+controller raises, hangs or is late holds its last input; after a while without a fresh input it brakes.
+Every such event is counted on the kart (:attr:`KartDriver.faults`).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from collections.abc import Sequence
+
+from controllers.base import Controller, RaceContext
+from controllers.hierarchical import HierarchicalController
+from sim_core.observation import Observation
+from sim_core.params import DT
+
+log = logging.getLogger(__name__)
+
+HUMAN = "human"  # the controller name of a kart driven over the drive websocket
+BRAKE_DEADBAND = 0.05  # [m/s] below this speed "brake" means no pedal (a held brake reverses from standstill)
+
+
+def brake_throttle(speed: float) -> float:
+    """The throttle that brings a kart moving at ``speed`` [m/s] to rest without reversing."""
+    if speed > BRAKE_DEADBAND:
+        return -1.0
+    if speed < -BRAKE_DEADBAND:
+        return 1.0
+    return 0.0
+
+
+class KartDriver:
+    """One kart's driver in a live race, its held inputs and its fault record.
+
+    Counters are written by one side each (``exceptions`` by the driver thread, the rest by the tick task),
+    so no lock is needed.
+    """
+
+    def __init__(
+        self, index: int, name: str, controller_name: str, controller: Controller | None, token: str | None
+    ) -> None:
+        self.index = index
+        self.name = name
+        self.controller_name = controller_name
+        self.controller = controller
+        self.token = token
+        self.hierarchical = isinstance(controller, HierarchicalController)
+        rate = controller.rate_hz if controller is not None else 1.0 / DT
+        self.every = max(1, round(1.0 / (DT * rate)))  # decide every this many ticks
+        # AI side
+        self.ready = False  # reset done
+        self.disabled = False  # reset failed or a call hung: no more calls
+        self.exceptions = 0
+        self.missed = 0  # ticks that found no fresh input for an observation handed over
+        self.hangs = 0
+        self.planner_faults = 0  # plans that failed or timed out
+        self.last_error: str | None = None
+        self.submitted_step = -1  # race step of the last observation handed to the thread
+        # inputs
+        self.steer = 0.0
+        self.throttle = 0.0
+        self.fresh_step = 0  # race step whose observation produced the held input (AI)
+        self.braking = False
+        self.waypoints: tuple[tuple[float, float], ...] = ()  # positions of the active plan's ego waypoints
+        self.predicted: tuple[tuple[float, float], ...] = ()  # and of its predictions for the other karts
+        # human side
+        self.connected = False
+        self.ever_connected = False
+        self.input: tuple[float, float, int | None] | None = None  # newest (steer, throttle, seq) received
+        self.input_at: float | None = None  # [s] time.monotonic() of the newest input
+        self.applied_seq: int | None = None  # seq of the input applied at the last tick
+
+    @property
+    def human(self) -> bool:
+        """Whether a person (or a client program) drives this kart over the websocket."""
+        return self.controller_name == HUMAN
+
+    @property
+    def faults(self) -> int:
+        """Exceptions, hangs, missed deadlines and failed plans of this kart's controller."""
+        return self.exceptions + self.hangs + self.missed + self.planner_faults
+
+    def reset(self, context: RaceContext) -> None:
+        """Prepare the controller for the race (hierarchical ones: the tracker only; planners live in workers)."""
+        assert self.controller is not None
+        if isinstance(self.controller, HierarchicalController):
+            self.controller.tracker.reset(context)
+        else:
+            self.controller.reset(context)
+
+    def compute(self, observation: Observation) -> tuple[float, float]:
+        """The controller's inputs for ``observation`` (raises what the controller raises)."""
+        assert self.controller is not None
+        if isinstance(self.controller, HierarchicalController):
+            action = self.controller.track(observation)
+        else:
+            action = self.controller.act(observation)
+        steer, throttle = float(action.steer), float(action.throttle)
+        if not (math.isfinite(steer) and math.isfinite(throttle)):
+            raise ValueError(f"non-finite action ({steer}, {throttle})")
+        return steer, throttle
+
+    def record_error(self, what: str) -> None:
+        """Remember the latest fault's description (the first one is also logged with its traceback)."""
+        if self.last_error is None:
+            log.warning("kart %d (%s): %s", self.index, self.controller_name, what, exc_info=True)
+        self.last_error = what
+
+
+class DriverThread:
+    """Runs AI drivers in one daemon thread: resets them, then computes inputs for each handed-over tick.
+
+    :meth:`submit` never blocks (the newest observations replace any not yet taken); results land in
+    :attr:`outbox` as ``kart -> (observation step, steer, throttle)``. :attr:`busy` tells which call is
+    running since when, so the tick task can declare it hung and :meth:`retire` the thread.
+    """
+
+    def __init__(self, drivers: Sequence[KartDriver], contexts: dict[int, RaceContext], name: str) -> None:
+        self._drivers = {d.index: d for d in drivers}
+        self._contexts = contexts
+        self._job: tuple[int, Sequence[Observation], tuple[int, ...]] | None = None
+        self._lock = threading.Lock()
+        self._wake = threading.Event()
+        self.retired = False
+        self.resetting = True
+        self.busy: tuple[int, float] | None = None  # (kart, time.monotonic() at call start)
+        self.outbox: dict[int, tuple[int, float, float]] = {}
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    @property
+    def contexts(self) -> dict[int, RaceContext]:
+        """The race contexts the drivers are reset with (by kart)."""
+        return self._contexts
+
+    def submit(self, step: int, observations: Sequence[Observation], karts: tuple[int, ...]) -> None:
+        """Hand over the observations of race step ``step`` for ``karts`` (newest wins)."""
+        with self._lock:
+            self._job = (step, observations, karts)
+        self._wake.set()
+
+    def retire(self) -> None:
+        """Stop using this thread; a call still running is abandoned and its answer discarded."""
+        self.retired = True
+        self._wake.set()
+
+    def _call_reset(self, driver: KartDriver) -> None:
+        try:
+            driver.reset(self._contexts[driver.index])
+        except Exception as exc:
+            driver.exceptions += 1
+            driver.disabled = True
+            driver.record_error(f"reset raised {type(exc).__name__}: {exc}")
+        else:
+            driver.ready = True
+
+    def _run(self) -> None:
+        for driver in self._drivers.values():
+            if driver.ready or driver.disabled:
+                continue
+            self.busy = (driver.index, time.monotonic())
+            self._call_reset(driver)
+            self.busy = None
+            if self.retired:
+                return
+        self.resetting = False
+        while True:
+            self._wake.wait()
+            self._wake.clear()
+            if self.retired:
+                return
+            with self._lock:
+                job, self._job = self._job, None
+            if job is None:
+                continue
+            step, observations, karts = job
+            for k in karts:
+                driver = self._drivers.get(k)
+                if driver is None or driver.disabled or not driver.ready:
+                    continue
+                self.busy = (k, time.monotonic())
+                result: tuple[int, float, float] | None = None
+                try:
+                    steer, throttle = driver.compute(observations[k])
+                except Exception as exc:
+                    driver.exceptions += 1
+                    driver.record_error(f"act raised {type(exc).__name__}: {exc}")
+                else:
+                    result = (step, steer, throttle)
+                self.busy = None
+                if self.retired:
+                    return  # a hung call came back after its kart was given up
+                if result is not None:
+                    self.outbox[k] = result

@@ -1,0 +1,108 @@
+"""The races this server process is running, and what they share (settings, planner workers, database)."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import secrets
+from collections.abc import Mapping
+
+from controllers.registry import ControllerSpec
+from server.db import RaceDatabase, StoredRace
+from server.drivers import HUMAN
+from server.planning import PlannerPool
+from server.session import RaceConfig, RaceSession, SceneFactory
+from server.settings import Settings
+
+log = logging.getLogger(__name__)
+
+SHUTDOWN_WAIT_S = 10.0  # [s] for every race to store its state when the server stops
+
+
+class TooManyRacesError(RuntimeError):
+    """The server already runs ``max_sessions`` live races."""
+
+
+class LiveRaces:
+    """Live races by id (and finished ones for ``keep_finished_s``); starts and ends them."""
+
+    def __init__(
+        self,
+        settings: Settings,
+        catalogue: Mapping[str, ControllerSpec],
+        pool: PlannerPool,
+        db: RaceDatabase,
+        scene_factory: SceneFactory | None,
+    ) -> None:
+        self.settings = settings
+        self.catalogue = catalogue
+        self.pool = pool
+        self.db = db
+        self.scene_factory = scene_factory
+        self.sessions: dict[str, RaceSession] = {}
+
+    def get(self, race_id: str) -> RaceSession | None:
+        """A race held in memory, or ``None``."""
+        return self.sessions.get(race_id)
+
+    def live_count(self) -> int:
+        """Races not over yet."""
+        return sum(1 for s in self.sessions.values() if s.live)
+
+    def scene_port(self, race_id: str) -> int | None:
+        """The local port of a race's 3D scene (``None``: no such race or no scene)."""
+        session = self.sessions.get(race_id)
+        scene = session.scene if session is not None else None
+        return scene.port if scene is not None else None
+
+    async def create(self, config: RaceConfig) -> RaceSession:
+        """Store and start a race; raises :class:`TooManyRacesError` when the server is full."""
+        if self.live_count() >= self.settings.max_sessions:
+            raise TooManyRacesError(f"{self.settings.max_sessions} races are running; try again when one ends")
+        race_id = secrets.token_hex(6)
+        tokens = {k: secrets.token_urlsafe(16) for k, kart in enumerate(config.karts) if kart.controller == HUMAN}
+        session = RaceSession(
+            race_id,
+            config,
+            tokens,
+            settings=self.settings,
+            catalogue=self.catalogue,
+            pool=self.pool,
+            db=self.db,
+            scene_factory=self.scene_factory,
+        )
+        stored = StoredRace(
+            id=race_id,
+            created_at=session.created_at,
+            status=session.status,
+            track=config.track_name,
+            laps=config.laps,
+            seed=config.seed,
+            kart_preset=config.kart_preset,
+            karts=session.kart_list(),
+            start_lanes=list(config.start_lanes) if config.start_lanes is not None else None,
+            duration=None,
+            result=None,
+            tick_stats=None,
+        )
+        await asyncio.to_thread(self.db.add, stored)
+        self.sessions[race_id] = session
+        session.on_closed = self._forget
+        session.start()
+        return session
+
+    def _forget(self, session: RaceSession) -> None:
+        self.sessions.pop(session.id, None)
+
+    async def shutdown(self) -> None:
+        """End every race (live ones as ``aborted``, with their state stored) and close their scenes."""
+        sessions = list(self.sessions.values())
+        for session in sessions:
+            session.close()
+        tasks = [s.task for s in sessions if s.task is not None]
+        if not tasks:
+            return
+        _done, pending = await asyncio.wait(tasks, timeout=SHUTDOWN_WAIT_S)
+        for task in pending:
+            log.warning("race task %s did not end in time; cancelling it", task.get_name())
+            task.cancel()

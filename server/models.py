@@ -1,0 +1,211 @@
+"""Every message at the HTTP and websocket edge, as pydantic models (the OpenAPI schema at ``/docs``)."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+MAX_SEED = 2**31 - 1
+
+
+class TrackOut(BaseModel):
+    """A built-in track."""
+
+    name: str
+    length_m: float
+    laps: int = Field(description="the track's default number of laps")
+    n_checkpoints: int
+    n_lanes: int
+    lane_change_limit: int = Field(description="L: lanes a kart may cross on one straight")
+    description: str
+
+
+class ControllerOut(BaseModel):
+    """A driver a race can name: a registered controller, or ``human``."""
+
+    name: str
+    description: str
+    parameters: dict[str, str]
+
+
+class KartIn(BaseModel):
+    """One kart of a new race."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    controller: str = Field(min_length=1, max_length=64, description="a name from GET /api/controllers")
+    name: str | None = Field(None, min_length=1, max_length=40, description="display name")
+
+
+class RaceIn(BaseModel):
+    """A new race."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    track: str = Field(description="a name from GET /api/tracks")
+    laps: int | None = Field(None, ge=1, description="default: the track's laps")
+    seed: int = Field(0, ge=0, le=MAX_SEED, description="seed of the planners")
+    start_lanes: list[int] | None = Field(None, description="one start lane (1-based) per kart; default 2, 3, 1, 4")
+    kart_preset: Literal["paper", "original"] = "paper"
+    karts: list[KartIn] = Field(min_length=1, max_length=8)
+
+
+class KartOut(BaseModel):
+    """A kart of a race."""
+
+    index: int
+    name: str
+    controller: str
+
+
+class CreatedKartOut(KartOut):
+    """A kart of a just-created race; human karts carry the page to drive them from."""
+
+    drive_url: str | None = None
+
+
+class RaceCreatedOut(BaseModel):
+    """The answer to POST /api/races. The drive tokens are shown only here."""
+
+    id: str
+    status: str
+    track: str
+    laps: int
+    seed: int
+    kart_preset: str
+    karts: list[CreatedKartOut]
+    viewer_url: str | None = Field(description="the 3D view (None when the server runs without it)")
+    telemetry_url: str = Field(description="websocket of RaceFrame messages")
+    drive_tokens: dict[str, str] = Field(description="kart index -> token, human karts only")
+
+
+class StandingOut(BaseModel):
+    """One kart's place in the running order."""
+
+    position: int
+    index: int
+    name: str
+    controller: str
+    lap: int
+    checkpoints_passed: int
+    finished: bool
+    finish_time: float | None
+    controller_faults: int
+
+
+class TickStatsOut(BaseModel):
+    """Tick timing: counts since the start, percentiles over the last 3,000 ticks."""
+
+    period_ms: float
+    ticks: int
+    overruns: int = Field(description="ticks that started more than one period late")
+    skipped: int = Field(description="deadlines skipped after overruns")
+    jitter_p50_ms: float = Field(description="|tick start - deadline|")
+    jitter_p99_ms: float
+    jitter_max_ms: float
+    work_p50_ms: float
+    work_p99_ms: float
+
+
+class DriverStatusOut(BaseModel):
+    """A kart's driver and its faults."""
+
+    index: int
+    name: str
+    controller: str
+    controller_faults: int = Field(description="exceptions + hangs + missed deadlines + failed plans")
+    exceptions: int
+    hangs: int
+    missed_deadlines: int
+    planner_faults: int
+    plans_applied: int
+    disabled: bool = Field(description="its controller failed to reset or hung: the kart brakes")
+    braking: bool = Field(description="braking for want of fresh input")
+    driver_connected: bool | None = Field(description="human karts: a driver is connected")
+    last_error: str | None
+
+
+class RaceSummaryOut(BaseModel):
+    """A race in a listing."""
+
+    id: str
+    status: Literal["starting", "waiting", "running", "finished", "stopped", "aborted"]
+    track: str
+    laps: int
+    created_at: datetime
+    time: float = Field(description="[s] race time")
+    karts: list[KartOut]
+    standings: list[StandingOut]
+    winner: int | None
+
+
+class RaceDetailOut(RaceSummaryOut):
+    """A race in full."""
+
+    seed: int
+    kart_preset: str
+    start_lanes: list[int] | None
+    step: int
+    drivers: list[DriverStatusOut]
+    tick_stats: TickStatsOut | None
+    viewer_url: str | None
+    telemetry_url: str
+    result_url: str
+    replay_url: str
+    error: str | None
+
+
+class TicksOut(BaseModel):
+    """Tick timing with the raw jitter of the last ticks (for benchmarks)."""
+
+    race_id: str
+    stats: TickStatsOut | None
+    recent_jitter_ms: list[float]
+
+
+class KartResultOut(BaseModel):
+    """One kart's result (the paper's per-race figures, plus its controller's faults)."""
+
+    index: int
+    name: str
+    controller: str
+    position: int
+    finished: bool
+    finish_time: float | None = Field(description="[s]")
+    laps: int = Field(description="laps completed")
+    checkpoints_passed: int
+    winner: bool
+    collisions_at_fault: int
+    illegal_lane_changes: int
+    safety_score: int = Field(description="collisions at fault + illegal lane changes")
+    wall_hits: int
+    contacts: int
+    buffer_violations: int
+    delta_r: float | None = Field(description="[m] mean distance from the planned lane at checkpoints")
+    delta_v: float | None = Field(description="[m/s] mean difference from the planned speed at checkpoints")
+    controller_faults: int
+    last_error: str | None = None
+
+
+class ResultOut(BaseModel):
+    """A race's result (final when ``status`` is ``finished``; the state when stopped otherwise)."""
+
+    race_id: str
+    status: str
+    track: str
+    laps: int
+    duration: float = Field(description="[s] race time")
+    winner: int | None = Field(description="kart index of the fastest finisher; None if nobody finished")
+    karts: list[KartResultOut]
+
+
+class DriveInput(BaseModel):
+    """A message on the drive websocket: the kart's inputs until the next message."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    steer: float = Field(ge=-1.0, le=1.0, allow_inf_nan=False, description="positive = left")
+    throttle: float = Field(ge=-1.0, le=1.0, allow_inf_nan=False, description="negative brakes")
+    seq: int | None = Field(None, description="echoed back as input_seq in the state after it is applied")

@@ -1,0 +1,188 @@
+"""High-level planning off the tick path: planner worker processes shared by every race.
+
+Each worker process keeps its own planner per ``(race, kart)`` key, built from the registered controller's
+factory and reset with the race's context once; afterwards a request carries only the observation (about
+1 KB) and the answer is the :class:`~controllers.tactical.planner.Plan` (about 1 KB). A key always goes to
+the same worker, so the MCTS tree reuse across re-plans works. Workers start with the ``spawn`` method and
+warm up by planning once, so numba's compiled kernels (``cache=True``) are loaded before the first race.
+
+A worker that dies or hangs is replaced; the planners it held are rebuilt on their next request.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import multiprocessing
+import time
+from collections.abc import Callable
+from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from typing import Any
+
+from controllers.base import Controller, HighLevelPlanner, RaceContext
+from controllers.tactical.planner import Plan
+from sim_core.observation import Observation
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class PlannerSetup:
+    """How a worker builds one kart's planner: the controller factory (a module-level function, pickled by
+    reference) whose ``.planner`` it uses, and the race context to reset it with."""
+
+    factory: Callable[[], Controller]
+    context: RaceContext
+
+
+class PlannerMissingError(RuntimeError):
+    """The worker holds no planner for this key (it was restarted): send the setup again."""
+
+
+# ----------------------------------------------------------------------------------------- worker process side
+_planners: dict[str, HighLevelPlanner] = {}
+
+
+def _build(key: str, setup: PlannerSetup) -> HighLevelPlanner:
+    planner: HighLevelPlanner = setup.factory().planner  # type: ignore[attr-defined]
+    planner.reset(setup.context)
+    _planners[key] = planner
+    return planner
+
+
+def _worker_open(key: str, setup: PlannerSetup) -> float:
+    """Build and reset the planner of ``key``; returns the seconds it took."""
+    start = time.perf_counter()
+    _build(key, setup)
+    return time.perf_counter() - start
+
+
+def _worker_plan(key: str, observation: Observation, setup: PlannerSetup | None) -> Plan:
+    """Plan for ``key`` from ``observation`` (building the planner first when ``setup`` is given)."""
+    planner = _planners.get(key)
+    if planner is None:
+        if setup is None:
+            raise PlannerMissingError(key)
+        planner = _build(key, setup)
+    return planner.plan(observation)
+
+
+def _worker_close(keys: tuple[str, ...]) -> None:
+    """Forget the planners of ``keys``."""
+    for key in keys:
+        _planners.pop(key, None)
+
+
+def _worker_warm() -> float:
+    """Plan once on the oval with a small budget so every compiled kernel is loaded; returns seconds."""
+    from controllers.hierarchical import MCTSPlanner
+    from sim_core.observation import observe
+    from sim_core.params import SimParams
+    from sim_core.track_io import get_track
+    from sim_core.world import World
+
+    start = time.perf_counter()
+    track = get_track("oval")
+    params = SimParams()
+    world = World(track, 1, 2, params, laps=1)
+    planner = MCTSPlanner(iterations=50)
+    planner.reset(RaceContext(track, params.kart, 0, 2, world.lane_change_limit, 0))
+    planner.plan(observe(world, 0)[0])
+    return time.perf_counter() - start
+
+
+# ----------------------------------------------------------------------------------------- server side
+class _Worker:
+    """One single-process executor and the keys whose planners it holds."""
+
+    def __init__(self, slot: int) -> None:
+        self.slot = slot
+        self.executor = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+        self.opened: set[str] = set()  # keys built in the current process
+        self.keys: set[str] = set()  # keys routed here
+        self.warm: Future[float] = self.executor.submit(_worker_warm)
+
+
+class PlannerPool:
+    """``n_workers`` planner processes; a key is pinned to the least-loaded worker when it is opened."""
+
+    def __init__(self, n_workers: int = 1) -> None:
+        if n_workers < 1:
+            raise ValueError(f"n_workers must be >= 1, got {n_workers}")
+        self._workers = [_Worker(i) for i in range(n_workers)]
+        self._home: dict[str, _Worker] = {}
+        self._setups: dict[str, PlannerSetup] = {}
+        self.restarts = 0
+
+    async def wait_warm(self) -> list[float]:
+        """Wait for every worker's warm-up plan; returns their seconds."""
+        return [await asyncio.wrap_future(w.warm) for w in self._workers]
+
+    async def open(self, key: str, setup: PlannerSetup) -> float:
+        """Build the planner of ``key`` in its worker; returns the seconds it took there."""
+        worker = min(self._workers, key=lambda w: len(w.keys))
+        self._home[key] = worker
+        self._setups[key] = setup
+        worker.keys.add(key)
+        seconds = await self._call(worker, _worker_open, key, setup)
+        worker.opened.add(key)
+        return float(seconds)
+
+    async def plan(self, key: str, observation: Observation) -> Plan:
+        """A plan for ``key`` from ``observation`` (raises what the planner raised, or ``BrokenProcessPool``)."""
+        worker = self._home[key]
+        setup = None if key in worker.opened else self._setups[key]
+        plan = await self._call(worker, _worker_plan, key, observation, setup)
+        worker.opened.add(key)
+        return plan  # type: ignore[no-any-return]
+
+    def close(self, keys: tuple[str, ...]) -> None:
+        """Forget ``keys`` here and (without waiting) in their workers."""
+        for worker in self._workers:
+            mine = tuple(k for k in keys if k in worker.keys)
+            if mine:
+                worker.keys.difference_update(mine)
+                worker.opened.difference_update(mine)
+                # a worker being replaced forgets everything anyway
+                with contextlib.suppress(BrokenProcessPool, RuntimeError):
+                    worker.executor.submit(_worker_close, mine)
+        for key in keys:
+            self._home.pop(key, None)
+            self._setups.pop(key, None)
+
+    def restart_worker_of(self, key: str) -> None:
+        """Kill and replace the worker holding ``key`` (its planner hangs); its other planners are rebuilt."""
+        worker = self._home.get(key)
+        if worker is not None:
+            self._replace(worker, kill=True)
+
+    async def _call(self, worker: _Worker, fn: Callable[..., Any], *args: Any) -> Any:
+        loop = asyncio.get_running_loop()
+        try:
+            return await loop.run_in_executor(worker.executor, fn, *args)
+        except BrokenProcessPool:
+            if self._workers[worker.slot] is worker:
+                self._replace(worker, kill=False)
+            raise
+
+    def _replace(self, worker: _Worker, *, kill: bool) -> None:
+        fresh = _Worker(worker.slot)
+        fresh.keys = worker.keys
+        self._workers[worker.slot] = fresh
+        for key in worker.keys:
+            self._home[key] = fresh
+        self.restarts += 1
+        log.warning("planner worker %d replaced (%s)", worker.slot, "hung" if kill else "died")
+        if kill:
+            # ProcessPoolExecutor cannot cancel a running call; ending its process is the only way out
+            for process in list(getattr(worker.executor, "_processes", {}).values()):
+                process.terminate()
+        worker.executor.shutdown(wait=False, cancel_futures=True)
+
+    def shutdown(self) -> None:
+        """Stop every worker process (blocking: call it through ``asyncio.to_thread``)."""
+        for worker in self._workers:
+            worker.executor.shutdown(wait=True, cancel_futures=True)

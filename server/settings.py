@@ -1,0 +1,32 @@
+"""Server configuration: every knob of the race server, read from ``KARTING_*`` environment variables."""
+
+from __future__ import annotations
+
+from pydantic import Field
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+
+class Settings(BaseSettings):
+    """Race server settings (environment prefix ``KARTING_``, e.g. ``KARTING_PORT=9000``)."""
+
+    model_config = SettingsConfigDict(env_prefix="KARTING_", extra="ignore")
+
+    host: str = "127.0.0.1"
+    port: int = Field(8000, ge=0, le=65535)
+    database_url: str = "sqlite:///./karting.db"  # SQLite files are opened in WAL mode
+    max_sessions: int = Field(16, ge=1, description="races live at once (starting, waiting or running)")
+    max_laps: int = Field(20, ge=1)
+    viewer_enabled: bool = True  # one 3D scene (viser) per race, served under /races/{id}/viewer/
+    plan_workers: int = Field(1, ge=1, description="planner worker processes shared by every race")
+    speedup: float = Field(1.0, gt=0.0, le=100.0, description="tick rate multiple of 50 Hz (tests); 1 = real time")
+    drive_timeout_s: float = Field(0.5, gt=0.0, description="[s] wall time without driver input before braking")
+    human_wait_s: float = Field(120.0, ge=0.0, description="[s] a race waits this long for its human drivers")
+    controller_hold_s: float = Field(0.5, ge=0.0, description="[s] race time a faulty AI kart holds its input")
+    controller_hang_s: float = Field(1.0, gt=0.0, description="[s] wall time after which a busy AI call is hung")
+    controller_reset_s: float = Field(20.0, gt=0.0, description="[s] wall time allowed for a driver's reset")
+    plan_timeout_s: float = Field(10.0, gt=0.0, description="[s] wall time after which a plan request is lost")
+    telemetry_hz: float = Field(25.0, gt=0.0, le=50.0, description="[Hz] telemetry messages per second")
+    keep_finished_s: float = Field(60.0, ge=0.0, description="[s] a finished race stays live (scene, sockets)")
+    switch_interval_s: float = Field(
+        0.0005, gt=0.0, description="[s] sys.setswitchinterval: how long a busy thread may keep the GIL"
+    )
