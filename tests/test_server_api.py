@@ -1,0 +1,211 @@
+"""The race server's REST API and telemetry through a real uvicorn server: listings, validation (422), unknown
+ids (404), an AI race to the finish with its result and replay, stopping, and results surviving a restart."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+from test_server_harness import LiveServer, server_settings, start_race, wait_status
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
+
+from controllers.registry import controller_names
+from server.db import RaceDatabase, StoredRace, utc_now
+from sim_core.params import DT
+from web.frame import KartFrame, RaceFrame
+
+SHORT_RACE = {"track": "oval", "laps": 1, "karts": [{"controller": "lane-follower"}, {"controller": "fixed-lqng"}]}
+
+
+@pytest.fixture(scope="module")
+def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
+    db = tmp_path_factory.mktemp("server") / "karting.db"
+    with LiveServer(server_settings(db)) as server:
+        yield server
+
+
+@pytest.fixture(scope="module")
+def client(live: LiveServer) -> Iterator[httpx.Client]:
+    with live.client() as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def finished_race(live: LiveServer, client: httpx.Client) -> dict[str, Any]:
+    """A short AI race run to the finish while a telemetry client records every message."""
+    race = start_race(client, **SHORT_RACE, seed=3)
+    messages = []
+    with connect(f"{live.ws_url}{race['telemetry_url']}", open_timeout=10) as ws:
+        try:
+            while True:
+                messages.append(json.loads(ws.recv(timeout=60)))
+        except ConnectionClosed as closed:
+            close_code = closed.rcvd.code if closed.rcvd is not None else None
+    return {"race": race, "telemetry": messages, "close_code": close_code}
+
+
+def test_tracks_list_every_builtin_track_both_ways(client: httpx.Client) -> None:
+    tracks = {t["name"]: t for t in client.get("/api/tracks").json()}
+    assert {"oval", "complex", "oval-reversed", "complex-reversed"} <= set(tracks)
+    oval = tracks["oval"]
+    assert oval["n_checkpoints"] == 24 and oval["laps"] == 4 and oval["lane_change_limit"] == 3
+    assert 280 < oval["length_m"] < 300
+
+
+def test_controllers_list_the_registry_and_human(client: httpx.Client) -> None:
+    controllers = {c["name"]: c for c in client.get("/api/controllers").json()}
+    assert set(controllers) == {*controller_names(), "human"}
+    assert controllers["mcts-lqng"]["parameters"]["iterations"] == "2000"
+    assert all(c["description"] for c in controllers.values())
+
+
+@pytest.mark.parametrize(
+    ("change", "where", "says"),
+    [
+        ({"track": "monza"}, ["body", "track"], "unknown track 'monza'"),
+        (
+            {"karts": [{"controller": "lane-follower"}, {"controller": "schumacher"}]},
+            ["body", "karts", 1, "controller"],
+            "unknown controller 'schumacher'",
+        ),
+        ({"laps": 0}, ["body", "laps"], "greater than or equal to 1"),
+        ({"laps": 500}, ["body", "laps"], "laps must be in 1..20"),
+        ({"karts": [{"controller": "lane-follower"}] * 9}, ["body", "karts"], "at most 8"),
+        ({"karts": []}, ["body", "karts"], "at least 1"),
+        ({"start_lanes": [1, 2, 3]}, ["body", "start_lanes"], "one start lane per kart"),
+        ({"start_lanes": [1, 7]}, ["body", "start_lanes", 1], "lanes are 1..4, got 7"),
+        ({"seed": -1}, ["body", "seed"], "greater than or equal to 0"),
+        ({"seed": "abc"}, ["body", "seed"], "valid integer"),
+        ({"kart_preset": "rocket"}, ["body", "kart_preset"], "'paper' or 'original'"),
+        ({"colour": "red"}, ["body", "colour"], "Extra inputs are not permitted"),
+    ],
+)
+def test_bad_race_requests_get_422_saying_what_is_wrong(
+    client: httpx.Client, change: dict[str, Any], where: list[Any], says: str
+) -> None:
+    response = client.post("/api/races", json={**SHORT_RACE, **change})
+    assert response.status_code == 422
+    errors = response.json()["detail"]
+    assert any(e["loc"] == where and says in e["msg"] for e in errors), errors
+
+
+def test_unknown_race_ids_get_404(client: httpx.Client) -> None:
+    for method, path in [
+        ("GET", "/api/races/nosuchrace"),
+        ("GET", "/api/races/nosuchrace/result"),
+        ("GET", "/api/races/nosuchrace/replay"),
+        ("GET", "/api/races/nosuchrace/ticks"),
+        ("POST", "/api/races/nosuchrace/stop"),
+    ]:
+        response = client.request(method, path)
+        assert response.status_code == 404, (method, path, response.text)
+        assert "nosuchrace" in response.json()["detail"]
+
+
+def test_unknown_race_telemetry_closes_with_4404(live: LiveServer) -> None:
+    with (
+        connect(f"{live.ws_url}/api/races/nosuchrace/telemetry", open_timeout=10) as ws,
+        pytest.raises(ConnectionClosed) as closed,
+    ):
+        ws.recv(timeout=10)
+    assert closed.value.rcvd is not None and closed.value.rcvd.code == 4404
+
+
+def test_ai_race_runs_to_the_finish_and_stores_its_result(finished_race: dict[str, Any], client: httpx.Client) -> None:
+    race = finished_race["race"]
+    assert race["viewer_url"] is None and race["drive_tokens"] == {}
+    assert [k["controller"] for k in race["karts"]] == ["lane-follower", "fixed-lqng"]
+    detail = client.get(f"/api/races/{race['id']}").json()
+    assert detail["status"] == "finished"
+    stats = detail["tick_stats"]
+    assert stats["ticks"] > 0 and stats["period_ms"] == pytest.approx(2.0)  # speedup 10
+    result = client.get(f"/api/races/{race['id']}/result").json()
+    assert result["status"] == "finished" and result["laps"] == 1
+    karts = result["karts"]
+    assert sorted(k["position"] for k in karts) == [1, 2]
+    assert all(k["finished"] and k["laps"] == 1 and k["finish_time"] > 10 for k in karts)
+    winner = min(karts, key=lambda k: k["finish_time"])
+    assert result["winner"] == winner["index"] and [k["winner"] for k in karts].count(True) == 1
+    for k in karts:
+        assert k["safety_score"] == k["collisions_at_fault"] + k["illegal_lane_changes"]
+        assert {"delta_r", "delta_v", "wall_hits", "controller_faults"} <= set(k)
+    assert karts[1]["delta_r"] is not None  # fixed-lqng's plans became the referee's targets
+    listed = {r["id"]: r for r in client.get("/api/races").json()}
+    assert listed[race["id"]]["status"] == "finished"
+    assert [s["index"] for s in listed[race["id"]]["standings"]] == [winner["index"], 1 - winner["index"]]
+
+
+def test_replay_has_every_step_and_the_plans(finished_race: dict[str, Any], client: httpx.Client) -> None:
+    race_id = finished_race["race"]["id"]
+    replay = client.get(f"/api/races/{race_id}/replay").json()
+    result = client.get(f"/api/races/{race_id}/result").json()
+    assert replay["track"] == "oval" and replay["dt"] == DT
+    assert len(replay["poses"]) == round(result["duration"] / DT)
+    assert all(len(step) == 2 and all(len(pose) == 6 for pose in step) for step in replay["poses"])
+    x0, y0 = replay["poses"][0][0][:2]
+    x1, y1 = replay["poses"][-1][0][:2]
+    assert (x1 - x0) ** 2 + (y1 - y0) ** 2 > 1.0  # the karts went somewhere
+    assert replay["plans"] and all(p["kart"] == 1 for p in replay["plans"])  # only fixed-lqng plans
+    assert "waypoints" in replay["plans"][0]["plan"]
+
+
+def test_telemetry_streams_frames_then_the_result(finished_race: dict[str, Any]) -> None:
+    messages = finished_race["telemetry"]
+    frames = [m for m in messages if m["type"] == "frame"]
+    assert len(frames) > 20
+    assert set(frames[-1]) == {"type", *RaceFrame.__dataclass_fields__}
+    assert set(frames[-1]["karts"][0]) == set(KartFrame.__dataclass_fields__)
+    steps = [f["step"] for f in frames if f["status"] == "running"]
+    assert steps == sorted(steps) and steps[-1] > steps[0]
+    assert any(f["karts"][1]["waypoints"] for f in frames)  # fixed-lqng's plan is drawn
+    assert frames[-1]["status"] == "finished"
+    assert messages[-1]["type"] == "result" and messages[-1]["result"]["status"] == "finished"
+    assert finished_race["close_code"] == 1000
+
+
+def test_result_is_409_while_running_and_stop_ends_the_race(client: httpx.Client) -> None:
+    race = start_race(client, **{**SHORT_RACE, "laps": 5})
+    wait_status(client, race["id"], ("running",), 30)
+    response = client.get(f"/api/races/{race['id']}/result")
+    assert response.status_code == 409 and "running" in response.json()["detail"]
+    assert client.get(f"/api/races/{race['id']}/replay").status_code == 409
+    stopped = client.post(f"/api/races/{race['id']}/stop")
+    assert stopped.status_code == 200 and stopped.json()["status"] == "stopped"
+    result = client.get(f"/api/races/{race['id']}/result").json()
+    assert result["status"] == "stopped" and not any(k["finished"] for k in result["karts"])
+    assert client.post(f"/api/races/{race['id']}/stop").status_code == 409
+
+
+def test_results_survive_a_restart_and_dead_races_are_aborted(tmp_path: Path) -> None:
+    db = tmp_path / "karting.db"
+    with LiveServer(server_settings(db, speedup=20.0)) as first, first.client() as c:
+        race = start_race(c, **SHORT_RACE)
+        wait_status(c, race["id"], ("finished",), 60)
+        result = c.get(f"/api/races/{race['id']}/result").json()
+        replay = c.get(f"/api/races/{race['id']}/replay").json()
+        unfinished = start_race(c, **{**SHORT_RACE, "laps": 5})
+        wait_status(c, unfinished["id"], ("running",), 30)
+    # a race a crashed server left "running" in the database
+    crashed = RaceDatabase(f"sqlite:///{db}")
+    crashed.add(StoredRace("deadbeef0000", utc_now(), "running", "oval", 1, 0, "paper", [], None, None, None, None))
+    crashed.close()
+    with LiveServer(server_settings(db, max_sessions=1)) as second, second.client() as c:
+        listed = {r["id"]: r for r in c.get("/api/races").json()}
+        assert listed[race["id"]]["status"] == "finished"
+        assert listed[unfinished["id"]]["status"] == "aborted"  # the server stopped under it
+        assert listed["deadbeef0000"]["status"] == "aborted"  # marked on startup
+        assert c.get(f"/api/races/{race['id']}/result").json() == result
+        assert c.get(f"/api/races/{race['id']}/replay").json() == replay
+        assert c.get(f"/api/races/{race['id']}").json()["tick_stats"]["ticks"] > 0
+        assert c.get("/api/races/deadbeef0000/result").status_code == 409
+        with connect(f"{second.ws_url}/api/races/{race['id']}/telemetry", open_timeout=10) as ws:
+            assert json.loads(ws.recv(timeout=10))["result"] == result
+        # max_sessions=1: a second live race is refused
+        start_race(c, **{**SHORT_RACE, "laps": 5})
+        refused = c.post("/api/races", json=SHORT_RACE)
+        assert refused.status_code == 429 and "races are running" in refused.json()["detail"]
