@@ -1,0 +1,206 @@
+"""Driving a human kart over the websocket of a real server (real time, 50 Hz): the kart moves and turns, bad
+connections are refused with 4xxx close codes, bad messages get an error and the connection and the race go on,
+a silent driver's kart brakes to a stop."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import httpx
+import pytest
+from test_server_harness import LiveServer, server_settings, start_race, wait_for, wait_status
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import ClientConnection, connect
+
+DRIVE_TIMEOUT_S = 0.3
+HUMAN_RACE = {
+    "track": "oval",
+    "laps": 3,
+    "karts": [{"controller": "human", "name": "Ada"}, {"controller": "lane-follower"}],
+}
+
+
+@pytest.fixture(scope="module")
+def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
+    db = tmp_path_factory.mktemp("drive") / "karting.db"
+    with LiveServer(server_settings(db, speedup=1.0, drive_timeout_s=DRIVE_TIMEOUT_S)) as server:
+        yield server
+
+
+@pytest.fixture(scope="module")
+def client(live: LiveServer) -> Iterator[httpx.Client]:
+    with live.client() as c:
+        yield c
+
+
+@pytest.fixture
+def race(client: httpx.Client) -> Iterator[dict[str, Any]]:
+    """A human (kart 0) against the lane follower, stopped after the test."""
+    created = start_race(client, **HUMAN_RACE)
+    wait_status(client, created["id"], ("waiting",), 30)
+    yield created
+    client.post(f"/api/races/{created['id']}/stop")
+
+
+def drive_url(live: LiveServer, race: dict[str, Any], kart: int = 0, token: str | None = None) -> str:
+    """The drive websocket of ``kart`` (with its own token unless one is given)."""
+    token = race["drive_tokens"].get(str(kart), "") if token is None else token
+    return f"{live.ws_url}/api/races/{race['id']}/drive?kart={kart}&token={token}"
+
+
+class Driver:
+    """A scripted driver: sends inputs at 50 Hz and keeps every message the server sends back."""
+
+    def __init__(self, ws: ClientConnection) -> None:
+        self.ws = ws
+        self.states: list[dict[str, Any]] = []
+        self.errors: list[str] = []
+        self.seq = 0
+
+    def drain(self, seconds: float = 0.0) -> None:
+        """Read what arrives within ``seconds``."""
+        until = time.monotonic() + seconds
+        while True:
+            try:
+                message = json.loads(self.ws.recv(timeout=max(0.0, until - time.monotonic())))
+            except TimeoutError:
+                return
+            if message["type"] == "state":
+                self.states.append(message)
+            elif message["type"] == "error":
+                self.errors.append(message["error"])
+
+    def drive(self, steer: float, throttle: float, seconds: float) -> None:
+        """Hold ``steer`` and ``throttle`` for ``seconds``, sending them 50 times a second."""
+        until = time.monotonic() + seconds
+        while time.monotonic() < until:
+            self.seq += 1
+            self.ws.send(json.dumps({"steer": steer, "throttle": throttle, "seq": self.seq}))
+            self.drain(0.02)
+
+    @property
+    def kart(self) -> dict[str, Any]:
+        """The kart in the newest state."""
+        kart: dict[str, Any] = self.states[-1]["kart"]
+        return kart
+
+
+def closed_with(url: str) -> tuple[int, str]:
+    """Connect to ``url`` and return the close code and reason the server answers with."""
+    with connect(url, open_timeout=10) as ws, pytest.raises(ConnectionClosed) as closed:
+        while True:
+            ws.recv(timeout=10)
+    assert closed.value.rcvd is not None
+    return closed.value.rcvd.code, closed.value.rcvd.reason
+
+
+def test_a_driven_kart_moves_and_turns(live: LiveServer, client: httpx.Client, race: dict[str, Any]) -> None:
+    assert race["status"] == "starting" and set(race["drive_tokens"]) == {"0"}
+    assert race["karts"][0]["drive_url"] == f"/races/{race['id']}/drive?kart=0&token={race['drive_tokens']['0']}"
+    with connect(drive_url(live, race), open_timeout=10) as ws:
+        wait_status(client, race["id"], ("running",), 10)  # the race waited for its driver
+        driver = Driver(ws)
+        driver.drive(0.0, 1.0, 1.5)
+        straight = driver.kart
+        assert straight["speed"] > 3.0 and straight["name"] == "Ada" and straight["controller"] == "human"
+        driver.drive(0.3, 0.5, 0.6)  # a radius of about 10 m: well clear of the wall
+        turned = driver.kart
+    turn = (turned["heading"] - straight["heading"] + math.pi) % (2 * math.pi) - math.pi
+    assert turn > 0.15  # steer > 0 turns left (counter-clockwise)
+    assert math.hypot(turned["x"] - straight["x"], turned["y"] - straight["y"]) > 3.0
+    applied = [s["input_seq"] for s in driver.states if s["input_seq"] is not None]
+    assert applied == sorted(applied) and applied[-1] >= driver.seq - 5
+    assert not driver.errors
+
+
+def test_inputs_are_reflected_within_two_ticks(live: LiveServer, client: httpx.Client, race: dict[str, Any]) -> None:
+    with connect(drive_url(live, race), open_timeout=10) as ws:
+        wait_status(client, race["id"], ("running",), 10)
+        driver = Driver(ws)
+        driver.drive(0.0, 0.5, 0.3)
+        delays = []
+        for seq in range(1000, 1010):
+            driver.drain(0.0)
+            sent_at_step = driver.states[-1]["step"]
+            ws.send(json.dumps({"steer": 0.0, "throttle": 0.5, "seq": seq}))
+            reflected = wait_for(
+                lambda s=seq: next((m for m in driver.states if m["input_seq"] == s), None) or driver.drain(0.005),
+                2.0,
+                0.0,
+            )
+            delays.append(reflected["step"] - sent_at_step)
+    # applied at the next tick; one more tick of slack for a state message still in flight when it was sent
+    assert max(delays) <= 2, delays
+
+
+def test_bad_connections_are_refused_with_close_codes(
+    live: LiveServer, client: httpx.Client, race: dict[str, Any]
+) -> None:
+    assert closed_with(drive_url(live, race, token="not-the-token")) == (4403, "wrong token")
+    code, reason = closed_with(drive_url(live, race, kart=1, token="x"))
+    assert code == 4400 and "not a human kart" in reason
+    assert closed_with(f"{live.ws_url}/api/races/{race['id']}/drive?kart=abc&token=x")[0] == 4400
+    assert closed_with(f"{live.ws_url}/api/races/{race['id']}/drive?kart=7&token=x")[0] == 4400
+    assert closed_with(f"{live.ws_url}/api/races/nosuchrace/drive?kart=0&token=x")[0] == 4404
+    with connect(drive_url(live, race), open_timeout=10) as first:
+        code, reason = closed_with(drive_url(live, race))
+        assert code == 4409 and "already has a driver" in reason
+        first.send(json.dumps({"steer": 0.0, "throttle": 1.0}))
+        assert json.loads(first.recv(timeout=5))["type"] == "state"  # the first driver keeps the kart
+    wait_for(lambda: not client.get(f"/api/races/{race['id']}").json()["drivers"][0]["driver_connected"], 5)
+    with connect(drive_url(live, race), open_timeout=10) as again:  # a driver may come back
+        assert json.loads(again.recv(timeout=5))["type"] == "state"
+    client.post(f"/api/races/{race['id']}/stop")
+    code, reason = closed_with(drive_url(live, race))
+    assert code == 4410 and "over" in reason
+
+
+def test_bad_messages_get_an_error_and_the_race_goes_on(
+    live: LiveServer, client: httpx.Client, race: dict[str, Any]
+) -> None:
+    bad = {
+        "not json": "Invalid JSON",
+        '{"steer": 1.5, "throttle": 0}': "steer: Input should be less than or equal to 1",
+        '{"steer": NaN, "throttle": 0}': "steer: Input should be a finite number",
+        '{"steer": 0, "throttle": -Infinity}': "throttle: Input should be a finite number",
+        '{"steer": 0}': "throttle: Field required",
+        '{"steer": 0, "throttle": 0, "boost": 1}': "boost: Extra inputs are not permitted",
+        "[0.1, 0.2]": "Input should be an object",
+        "x" * 5000: "message too long",
+    }
+    with connect(drive_url(live, race), open_timeout=10) as ws:
+        wait_status(client, race["id"], ("running",), 10)
+        driver = Driver(ws)
+        for message, says in bad.items():
+            ws.send(message)
+            wait_for(lambda: driver.errors or driver.drain(0.02), 5, 0.0)
+            error = driver.errors.pop()
+            assert says in error, (message, error)
+        ws.send(json.dumps({"steer": 0.1, "throttle": 0.8, "seq": 42}))
+        wait_for(lambda: any(s["input_seq"] == 42 for s in driver.states) or driver.drain(0.02), 5, 0.0)
+    before = client.get(f"/api/races/{race['id']}").json()
+    time.sleep(0.3)
+    after = client.get(f"/api/races/{race['id']}").json()
+    assert after["status"] == "running" and after["step"] > before["step"]
+
+
+def test_a_silent_driver_brakes_to_a_stop_without_reversing(
+    live: LiveServer, client: httpx.Client, race: dict[str, Any]
+) -> None:
+    with connect(drive_url(live, race), open_timeout=10) as ws:
+        wait_status(client, race["id"], ("running",), 10)
+        driver = Driver(ws)
+        driver.drive(0.0, 1.0, 1.5)
+        fast = driver.kart["speed"]
+        assert fast > 4.0 and not driver.states[-1]["braking"]
+        driver.drain(DRIVE_TIMEOUT_S + 0.2)  # silence
+        assert driver.states[-1]["braking"]
+        assert driver.kart["speed"] < fast
+        driver.drain(fast / 6.0 + 0.5)  # the paper kart brakes at 6 m/s^2
+    speeds = [s["kart"]["speed"] for s in driver.states[-10:]]
+    assert all(-0.05 <= v < 0.2 for v in speeds), speeds
+    assert client.get(f"/api/races/{race['id']}").json()["drivers"][0]["braking"]
