@@ -1,7 +1,7 @@
 """The drivers of a live race: per kart an AI controller or a human on the drive websocket, and the thread
 that runs the AI controllers off the tick task.
 
-The tick task never waits for a controller. Each tick it hands the newest observations to the race's
+The tick task never waits for a controller. Each tick it hands the newest observation of each AI kart to its
 :class:`DriverThread` and reads the newest inputs the thread has finished (one tick of latency). A kart whose
 controller raises, hangs or is late holds its last input; after a while without a fresh input it brakes.
 Every such event is counted on the kart (:attr:`KartDriver.faults`).
@@ -13,7 +13,6 @@ import logging
 import math
 import threading
 import time
-from collections.abc import Sequence
 
 from controllers.base import Controller, RaceContext
 from controllers.hierarchical import HierarchicalController
@@ -114,35 +113,32 @@ class KartDriver:
 
 
 class DriverThread:
-    """Runs AI drivers in one daemon thread: resets them, then computes inputs for each handed-over tick.
+    """Runs one AI kart's controller in a daemon thread: resets it, then computes inputs for each handed-over
+    observation.
 
-    :meth:`submit` never blocks (the newest observations replace any not yet taken); results land in
-    :attr:`outbox` as ``kart -> (observation step, steer, throttle)``. :attr:`busy` tells which call is
-    running since when, so the tick task can declare it hung and :meth:`retire` the thread.
+    :meth:`submit` never blocks (the newest observation replaces one not yet taken); the answer lands in
+    :attr:`latest` as ``(observation step, steer, throttle)``. :attr:`busy_since` tells since when a call has
+    been running, so the tick task can declare it hung and :meth:`retire` the thread. One thread per kart: a
+    controller that hangs delays no other kart.
     """
 
-    def __init__(self, drivers: Sequence[KartDriver], contexts: dict[int, RaceContext], name: str) -> None:
-        self._drivers = {d.index: d for d in drivers}
-        self._contexts = contexts
-        self._job: tuple[int, Sequence[Observation], tuple[int, ...]] | None = None
+    def __init__(self, driver: KartDriver, context: RaceContext, name: str) -> None:
+        self.driver = driver
+        self._context = context
+        self._job: tuple[int, Observation] | None = None
         self._lock = threading.Lock()
         self._wake = threading.Event()
         self.retired = False
         self.resetting = True
-        self.busy: tuple[int, float] | None = None  # (kart, time.monotonic() at call start)
-        self.outbox: dict[int, tuple[int, float, float]] = {}
+        self.busy_since: float | None = None  # time.monotonic() at the start of the running call
+        self.latest: tuple[int, float, float] | None = None
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._thread.start()
 
-    @property
-    def contexts(self) -> dict[int, RaceContext]:
-        """The race contexts the drivers are reset with (by kart)."""
-        return self._contexts
-
-    def submit(self, step: int, observations: Sequence[Observation], karts: tuple[int, ...]) -> None:
-        """Hand over the observations of race step ``step`` for ``karts`` (newest wins)."""
+    def submit(self, step: int, observation: Observation) -> None:
+        """Hand over the kart's observation of race step ``step`` (newest wins)."""
         with self._lock:
-            self._job = (step, observations, karts)
+            self._job = (step, observation)
         self._wake.set()
 
     def retire(self) -> None:
@@ -150,51 +146,41 @@ class DriverThread:
         self.retired = True
         self._wake.set()
 
-    def _call_reset(self, driver: KartDriver) -> None:
+    def _reset(self) -> None:
+        driver = self.driver
+        self.busy_since = time.monotonic()
         try:
-            driver.reset(self._contexts[driver.index])
+            driver.reset(self._context)
         except Exception as exc:
             driver.exceptions += 1
             driver.disabled = True
             driver.record_error(f"reset raised {type(exc).__name__}: {exc}")
         else:
-            driver.ready = True
+            driver.ready = not self.retired
+        self.busy_since = None
 
     def _run(self) -> None:
-        for driver in self._drivers.values():
-            if driver.ready or driver.disabled:
-                continue
-            self.busy = (driver.index, time.monotonic())
-            self._call_reset(driver)
-            self.busy = None
-            if self.retired:
-                return
+        driver = self.driver
+        if not driver.disabled:
+            self._reset()
         self.resetting = False
-        while True:
+        while not self.retired and driver.ready:
             self._wake.wait()
             self._wake.clear()
-            if self.retired:
-                return
             with self._lock:
                 job, self._job = self._job, None
-            if job is None:
+            if job is None or self.retired:
                 continue
-            step, observations, karts = job
-            for k in karts:
-                driver = self._drivers.get(k)
-                if driver is None or driver.disabled or not driver.ready:
-                    continue
-                self.busy = (k, time.monotonic())
-                result: tuple[int, float, float] | None = None
-                try:
-                    steer, throttle = driver.compute(observations[k])
-                except Exception as exc:
-                    driver.exceptions += 1
-                    driver.record_error(f"act raised {type(exc).__name__}: {exc}")
-                else:
-                    result = (step, steer, throttle)
-                self.busy = None
-                if self.retired:
-                    return  # a hung call came back after its kart was given up
-                if result is not None:
-                    self.outbox[k] = result
+            step, observation = job
+            self.busy_since = time.monotonic()
+            result: tuple[int, float, float] | None = None
+            try:
+                steer, throttle = driver.compute(observation)
+            except Exception as exc:
+                driver.exceptions += 1
+                driver.record_error(f"act raised {type(exc).__name__}: {exc}")
+            else:
+                result = (step, steer, throttle)
+            self.busy_since = None
+            if result is not None and not self.retired:  # a hung call that came back is not used
+                self.latest = result

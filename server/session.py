@@ -138,7 +138,7 @@ class RaceSession:
         self.replay = Replay(config.track.name, DT)
         self.plans_version = 0
         self.error: str | None = None
-        self._thread: DriverThread | None = None
+        self._threads: dict[int, DriverThread] = {}  # AI kart -> its controller's thread
         self._actions = np.zeros((1, len(self.drivers), 2))
         self._plan_tasks: dict[int, tuple[asyncio.Task[Plan], float]] = {}  # kart -> (request, wall time sent)
         self._stop_status: str | None = None
@@ -253,12 +253,11 @@ class RaceSession:
             for d in self.drivers
             if not d.human
         }
-        ai = [d for d in self.drivers if not d.human]
-        if ai:
-            self._thread = DriverThread(ai, contexts, name=f"race-{self.id}-drivers")
+        ai = [d for d in self.drivers if not d.human and not d.disabled]
+        self._threads = {d.index: DriverThread(d, contexts[d.index], f"race-{self.id}-kart{d.index}") for d in ai}
         opening = [self._open_planner(d, contexts[d.index]) for d in ai if d.hierarchical]
         await asyncio.gather(self._open_scene(), *opening)
-        while self._thread is not None and self._thread.resetting and self._stop_status is None:
+        while any(t.resetting for t in self._threads.values()) and self._stop_status is None:
             self._check_hang()
             await asyncio.sleep(HANG_POLL_S)
         self._publish()
@@ -353,7 +352,8 @@ class RaceSession:
         d.braking = False
 
     def _ai_input(self, d: KartDriver, step: int, speed: float) -> None:
-        out = self._thread.outbox.get(d.index) if self._thread is not None else None
+        thread = self._threads.get(d.index)
+        out = thread.latest if thread is not None else None
         if out is not None and out[0] > d.fresh_step:
             d.fresh_step, d.steer, d.throttle = out
         if d.submitted_step > d.fresh_step:
@@ -366,40 +366,28 @@ class RaceSession:
             d.braking = False
 
     def _submit(self, observations: Sequence[Observation]) -> None:
-        thread = self._thread
-        if thread is None or self.world is None:
-            return
+        assert self.world is not None
         step = int(self.world.steps[0])
-        due = tuple(
-            d.index
-            for d in self.drivers
-            if not d.human
-            and d.ready
-            and not d.disabled
-            and step % d.every == 0
-            and not observations[d.index].me.finished
-        )
-        for k in due:
-            self.drivers[k].submitted_step = step
-        if due:
-            thread.submit(step, observations, due)
+        for k, thread in self._threads.items():
+            d = self.drivers[k]
+            if d.ready and not d.disabled and step % d.every == 0 and not observations[k].me.finished:
+                d.submitted_step = step
+                thread.submit(step, observations[k])
 
     def _check_hang(self) -> None:
-        thread = self._thread
-        if thread is None or thread.busy is None:
-            return
-        kart, since = thread.busy
-        limit = self.settings.controller_reset_s if thread.resetting else self.settings.controller_hang_s
-        if time.monotonic() - since <= limit:
-            return
-        d = self.drivers[kart]
-        d.hangs += 1
-        d.disabled = True
-        d.last_error = f"{'reset' if thread.resetting else 'act'} did not return within {limit:g} s"
-        log.warning("race %s kart %d (%s): %s; the kart brakes", self.id, kart, d.controller_name, d.last_error)
-        thread.retire()
-        rest = [x for x in self.drivers if not x.human and not x.disabled]
-        self._thread = DriverThread(rest, thread.contexts, name=f"race-{self.id}-drivers") if rest else None
+        now = time.monotonic()
+        for k, thread in list(self._threads.items()):
+            since = thread.busy_since
+            limit = self.settings.controller_reset_s if thread.resetting else self.settings.controller_hang_s
+            if since is None or now - since <= limit:
+                continue
+            d = self.drivers[k]
+            d.hangs += 1
+            d.disabled = True
+            d.last_error = f"{'reset' if thread.resetting else 'act'} did not return within {limit:g} s"
+            log.warning("race %s kart %d (%s): %s; the kart brakes", self.id, k, d.controller_name, d.last_error)
+            thread.retire()
+            del self._threads[k]
 
     # ------------------------------------------------------------------ plans
     def _plan_key(self, d: KartDriver) -> str:
@@ -589,9 +577,9 @@ class RaceSession:
         self._db.finish(self.id, result["status"], result["duration"], result, tick_stats or {}, self.replay_dict())
 
     def _release(self) -> None:
-        if self._thread is not None:
-            self._thread.retire()
-            self._thread = None
+        for thread in self._threads.values():
+            thread.retire()
+        self._threads.clear()
         for task, _sent in self._plan_tasks.values():
             task.cancel()
         self._plan_tasks.clear()
