@@ -12,6 +12,7 @@ from typing import Any
 
 import httpx
 import pytest
+import viser
 from test_server_harness import LiveServer, server_settings, start_race, wait_for, wait_status
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
@@ -27,7 +28,8 @@ HUMAN_RACE = {
 @pytest.fixture(scope="module")
 def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
     db = tmp_path_factory.mktemp("drive") / "karting.db"
-    with LiveServer(server_settings(db, speedup=1.0, drive_timeout_s=DRIVE_TIMEOUT_S)) as server:
+    settings = server_settings(db, speedup=1.0, drive_timeout_s=DRIVE_TIMEOUT_S, viewer_enabled=True)
+    with LiveServer(settings) as server:
         yield server
 
 
@@ -204,3 +206,12 @@ def test_a_silent_driver_brakes_to_a_stop_without_reversing(
     speeds = [s["kart"]["speed"] for s in driver.states[-10:]]
     assert all(-0.05 <= v < 0.2 for v in speeds), speeds
     assert client.get(f"/api/races/{race['id']}").json()["drivers"][0]["braking"]
+
+
+def test_the_race_has_a_live_3d_view(live: LiveServer, client: httpx.Client, race: dict[str, Any]) -> None:
+    assert race["viewer_url"] == f"/races/{race['id']}/viewer/"
+    page = client.get(race["viewer_url"])
+    assert page.status_code == 200 and "<html" in page.text.lower()
+    url = f"{live.ws_url}/races/{race['id']}/viewer"
+    with connect(url, subprotocols=[f"viser-v{viser.__version__}"], open_timeout=10, max_size=None) as ws:  # type: ignore[list-item]
+        assert isinstance(ws.recv(timeout=10), bytes)  # the relayed scene
