@@ -88,6 +88,9 @@ class LiveRaces:
         await asyncio.to_thread(self.db.add, stored)
         self.sessions[race_id] = session
         session.on_closed = self._forget
+        session.other_starts = lambda: [
+            s.schedule.t0 for s in self.sessions.values() if s is not session and s.live and s.schedule is not None
+        ]
         session.start()
         return session
 

@@ -34,7 +34,7 @@ from server.db import RaceDatabase, utc_now
 from server.drivers import HUMAN, DriverThread, KartDriver, brake_throttle
 from server.planning import PlannerPool, PlannerSetup
 from server.settings import Settings
-from server.ticks import TickSchedule, sleep_until
+from server.ticks import TickSchedule, sleep_until, spread_start
 from sim_core import state as st
 from sim_core.observation import Observation, observe
 from sim_core.params import DT, SimParams, kart_preset
@@ -82,6 +82,11 @@ class RaceConfig:
     start_lanes: tuple[int, ...] | None
     kart_preset: str
     karts: tuple[KartEntry, ...]
+
+
+def frame_dict(frame: RaceFrame) -> dict[str, Any]:
+    """``dataclasses.asdict(frame)`` for JSON (tuples stay tuples), in a tenth of the time: frames are flat."""
+    return {**frame.__dict__, "karts": [kart.__dict__ for kart in frame.karts]}
 
 
 class Broadcast:
@@ -147,6 +152,7 @@ class RaceSession:
         self._message_cache: tuple[int, str] | None = None
         self.task: asyncio.Task[None] | None = None
         self.on_closed: Callable[[RaceSession], None] | None = None
+        self.other_starts: Callable[[], list[float]] = list  # schedule starts of the other running races
 
     def _make_driver(self, index: int, entry: KartEntry, token: str | None) -> KartDriver:
         if entry.controller == HUMAN:
@@ -204,7 +210,7 @@ class RaceSession:
         if frame is None:
             return None
         if self._message_cache is None or self._message_cache[0] != id(frame):
-            self._message_cache = (id(frame), json.dumps({"type": "frame", **asdict(frame)}))
+            self._message_cache = (id(frame), json.dumps({"type": "frame", **frame_dict(frame)}))
         return self._message_cache[1]
 
     def replay_dict(self) -> dict[str, Any]:
@@ -305,7 +311,8 @@ class RaceSession:
         loop = asyncio.get_running_loop()
         period = DT / self.settings.speedup
         self._submit(observe(self.world, 0))  # the first inputs come from the grid
-        schedule = self.schedule = TickSchedule(loop.time() + period, period)
+        t0 = spread_start(loop.time() + period, period, self.other_starts())
+        schedule = self.schedule = TickSchedule(t0, period)
         while True:
             await sleep_until(schedule.deadline)
             schedule.started(loop.time())

@@ -34,6 +34,22 @@ def _wake(future: asyncio.Future[None]) -> None:
         future.set_result(None)
 
 
+def spread_start(earliest: float, period: float, others: list[float]) -> float:
+    """The first time from ``earliest`` whose phase (time mod ``period``) is the middle of the widest gap
+    between the phases of ``others`` (the starts of the other races' schedules).
+
+    Races whose ticks (and the controller work that follows each tick) do not coincide do not wait for each
+    other on the event loop or for the GIL.
+    """
+    if not others:
+        return earliest
+    phases = sorted(t % period for t in others)
+    gaps = [(b - a, a) for a, b in zip(phases, [*phases[1:], phases[0] + period])]
+    width, start = max(gaps)
+    target = (start + width / 2) % period
+    return earliest + (target - earliest % period) % period
+
+
 @dataclass(frozen=True)
 class TickSummary:
     """Tick timing of one race: counts since the start, percentiles over the last :data:`WINDOW` ticks."""

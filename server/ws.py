@@ -23,7 +23,6 @@ import asyncio
 import contextlib
 import json
 import secrets
-from dataclasses import asdict
 from typing import Any
 
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
@@ -131,7 +130,7 @@ async def _send_states(websocket: WebSocket, session: RaceSession, driver: KartD
                     "status": frame.status,
                     "input_seq": driver.applied_seq,
                     "braking": driver.braking,
-                    "kart": asdict(frame.karts[driver.index]),
+                    "kart": frame.karts[driver.index].__dict__,  # a flat dataclass: its fields
                 }
                 async with lock:
                     await websocket.send_text(json.dumps(state))
