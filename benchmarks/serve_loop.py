@@ -82,6 +82,9 @@ async def measure(client: httpx.AsyncClient, ws_url: str, n: int, settle: float,
         return [(await client.get(f"/api/races/{r['id']}")).json() for r in races]
 
     before = await snapshot()
+    canary = await asyncio.create_subprocess_exec(
+        sys.executable, __file__, "--canary", str(window), stdout=asyncio.subprocess.PIPE
+    )
     await asyncio.sleep(window)
     ticks = [(await client.get(f"/api/races/{r['id']}/ticks")).json() for r in races]
     after = await snapshot()
@@ -93,6 +96,7 @@ async def measure(client: httpx.AsyncClient, ws_url: str, n: int, settle: float,
         overruns += a["tick_stats"]["overruns"] - b["tick_stats"]["overruns"]
         missed += sum(x["missed_deadlines"] for x in a["drivers"]) - sum(x["missed_deadlines"] for x in b["drivers"])
     statuses = {a["status"] for a in after}
+    canary_out, _ = await canary.communicate()
     for race in races:
         await client.post(f"/api/races/{race['id']}/stop")
     for ws in viewers:
@@ -109,6 +113,7 @@ async def measure(client: httpx.AsyncClient, ws_url: str, n: int, settle: float,
         "missed": missed,
         "statuses": sorted(statuses),
         "viewers": len(viewers),
+        "canary": json.loads(canary_out),
     }
 
 
@@ -144,36 +149,57 @@ async def drive_reflect(client: httpx.AsyncClient, ws_url: str, inputs: int) -> 
     return delays
 
 
+def start_server(port: int, db: str, realtime: int) -> subprocess.Popen[bytes]:
+    """``karting serve`` on ``port`` with the database ``db``."""
+    env = {
+        **os.environ,
+        "KARTING_MAX_SESSIONS": "16",
+        "KARTING_KEEP_FINISHED_S": "2",
+        "KARTING_REALTIME_PRIORITY": str(realtime),
+    }
+    command = [sys.executable, "-m", "sim_core.cli", "serve", "--port", str(port), "--db", db]
+    return subprocess.Popen(command, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+
+
+async def wait_up(client: httpx.AsyncClient, server: subprocess.Popen[bytes]) -> float:
+    """Seconds until the server answers."""
+    started = time.monotonic()
+    while True:
+        with contextlib.suppress(httpx.TransportError):
+            if (await client.get("/api/tracks")).status_code == 200:
+                return time.monotonic() - started
+        if server.poll() is not None or time.monotonic() - started > 180:
+            raise RuntimeError(f"server did not start: {server.stderr.read().decode() if server.stderr else ''}")
+        await asyncio.sleep(0.2)
+
+
+def report(n: int, r: dict[str, Any]) -> None:
+    """Print one load level's figures."""
+    c = r["canary"]
+    print(
+        f"{n} race(s), {r['viewers']} viewer sockets, {r['ticks']} ticks: jitter p50 {r['p50']:.3f} ms, "
+        f"p99 {r['p99']:.3f} ms, max {r['max']:.2f} ms; overruns {r['overruns']}; "
+        f"controller missed deadlines {r['missed']}; statuses {r['statuses']}\n"
+        f"  meanwhile a bare 50 Hz sleep loop in another process (the machine's own load): "
+        f"p50 {c['p50']:.3f} ms, p99 {c['p99']:.3f} ms, max {c['max']:.2f} ms"
+    )
+
+
 async def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Every measurement; returns the JSON summary."""
     port = free_port()
+    ws_url = f"ws://127.0.0.1:{port}"
+    results = {}
     with tempfile.TemporaryDirectory() as tmp:
-        env = {**os.environ, "KARTING_MAX_SESSIONS": "16", "KARTING_KEEP_FINISHED_S": "2"}
-        command = [sys.executable, "-m", "sim_core.cli", "serve", "--port", str(port), "--db", f"{tmp}/bench.db"]
-        server = subprocess.Popen(command, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        server = start_server(port, f"{tmp}/bench.db", args.realtime)
         try:
             async with httpx.AsyncClient(base_url=f"http://127.0.0.1:{port}", timeout=30) as client:
-                started = time.monotonic()
-                while True:
-                    with contextlib.suppress(httpx.TransportError):
-                        if (await client.get("/api/tracks")).status_code == 200:
-                            break
-                    if server.poll() is not None or time.monotonic() - started > 120:
-                        raise RuntimeError(
-                            f"server did not start: {server.stderr.read().decode() if server.stderr else ''}"
-                        )
-                    await asyncio.sleep(0.2)
-                print(f"server up in {time.monotonic() - started:.1f} s (port {port})")
-                results = {}
+                print(f"server up in {await wait_up(client, server):.1f} s (realtime priority {args.realtime})")
                 for n in args.sessions:
-                    r = await measure(client, f"ws://127.0.0.1:{port}", n, args.settle, args.window)
-                    results[n] = r
-                    print(
-                        f"{n} race(s), {r['viewers']} viewer sockets, {r['ticks']} ticks: jitter p50 {r['p50']:.3f} ms, "
-                        f"p99 {r['p99']:.3f} ms, max {r['max']:.2f} ms; overruns {r['overruns']}; "
-                        f"controller missed deadlines {r['missed']}; statuses {r['statuses']}"
-                    )
+                    results[n] = await measure(client, ws_url, n, args.settle, args.window)
+                    report(n, results[n])
                     await asyncio.sleep(1.0)
-                delays = await drive_reflect(client, f"ws://127.0.0.1:{port}", args.inputs)
+                delays = await drive_reflect(client, ws_url, args.inputs)
                 print(
                     f"drive input -> state reflecting it: median {statistics.median(delays)} ticks, "
                     f"max {max(delays)} ticks ({len(delays)} inputs)"
@@ -190,13 +216,36 @@ async def run(args: argparse.Namespace) -> dict[str, Any]:
     return out
 
 
+def canary(seconds: float) -> dict[str, float]:
+    """Lateness of a bare 50 Hz sleep loop in its own process: what this machine's load alone does to timing."""
+    late = []
+    t0 = time.monotonic()
+    n = 0
+    while time.monotonic() - t0 < seconds:
+        n += 1
+        deadline = t0 + n * 0.02
+        time.sleep(max(0.0, deadline - time.monotonic()))
+        late.append((time.monotonic() - deadline) * 1e3)
+    values = np.array(late)
+    return {
+        "p50": float(np.percentile(values, 50)),
+        "p99": float(np.percentile(values, 99)),
+        "max": float(values.max()),
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--sessions", type=lambda s: [int(x) for x in s.split(",")], default=[1, 4, 8])
     parser.add_argument("--window", type=float, default=10.0, help="[s] measured per load level")
     parser.add_argument("--settle", type=float, default=3.0, help="[s] after the races start, before measuring")
     parser.add_argument("--inputs", type=int, default=200, help="drive inputs sent to measure the reflection")
+    parser.add_argument("--realtime", type=int, default=0, help="the server's KARTING_REALTIME_PRIORITY (0: off)")
+    parser.add_argument("--canary", type=float, default=None, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.canary is not None:
+        print(json.dumps(canary(args.canary)))
+        return
     print(json.dumps(asyncio.run(run(args))))
 
 

@@ -6,6 +6,7 @@ Run it with ``karting serve`` (one uvicorn worker: races live in this process's 
 from __future__ import annotations
 
 import asyncio
+import gc
 import logging
 import sys
 from collections.abc import AsyncIterator, Callable, Mapping
@@ -18,6 +19,7 @@ from server import api, ws
 from server.db import RaceDatabase
 from server.drivers import HUMAN, KartDriver
 from server.live import LiveRaces
+from server.loop import make_ordinary, make_realtime
 from server.planning import PlannerPool
 from server.session import SceneFactory
 from server.settings import Settings
@@ -100,12 +102,22 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
         app.state.races = races
         try:
             await asyncio.gather(pool.wait_warm(), asyncio.to_thread(warm_tick_path, catalogue))
+            # what start-up built (modules, compiled kernels, tables) lives as long as the process: keep it out
+            # of the collector's full passes, which would otherwise stall the ticks for tens of milliseconds
+            gc.collect()
+            gc.freeze()
+            if settings.realtime_priority:
+                if make_realtime(settings.realtime_priority):
+                    log.info("event loop thread runs at SCHED_FIFO priority %d", settings.realtime_priority)
+                else:
+                    log.warning("real-time priority not allowed here (needs CAP_SYS_NICE); running as usual")
             yield
         finally:
             await races.shutdown()
             await asyncio.to_thread(pool.shutdown)
             db.close()
             sys.setswitchinterval(switch_interval)
+            make_ordinary()
 
     app = FastAPI(title="HeadToHead Karting", description=DESCRIPTION, version="0.1.0", lifespan=lifespan)
     app.state.settings = settings

@@ -1,4 +1,5 @@
-"""An asyncio event loop whose timers fire to the microsecond, for the 50 Hz race ticks.
+"""An asyncio event loop whose timers fire to the microsecond, for the 50 Hz race ticks, and (optionally) a
+real-time scheduling class for the thread that runs it.
 
 The standard selector loop waits with ``epoll_wait``, whose timeout is whole milliseconds rounded up, so a
 timer set for a tick deadline fires 0-1 ms late (about 0.5 ms on average). Here the wait itself is a
@@ -9,6 +10,8 @@ non-blocking ``epoll_wait`` that collects the events.
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import os
 import select
 import selectors
 
@@ -33,3 +36,27 @@ def new_precise_loop() -> asyncio.AbstractEventLoop:
     if hasattr(selectors, "EpollSelector"):
         return asyncio.SelectorEventLoop(PreciseEpollSelector())
     return asyncio.new_event_loop()
+
+
+def make_realtime(priority: int) -> bool:
+    """Put the calling thread (the event loop's) in the ``SCHED_FIFO`` real-time class at ``priority``.
+
+    On a busy machine an ordinary thread waits behind other processes for the CPU for tens of milliseconds;
+    a real-time one runs when it wakes. Threads and processes it creates afterwards start as ordinary ones
+    (``SCHED_RESET_ON_FORK``), so controllers and planners never take the CPU from the rest of the system.
+    Needs ``CAP_SYS_NICE`` (or root); returns False, changing nothing, where it is not allowed.
+    """
+    policy = getattr(os, "SCHED_FIFO", None)
+    if policy is None or priority <= 0:
+        return False
+    try:
+        os.sched_setscheduler(0, policy | getattr(os, "SCHED_RESET_ON_FORK", 0), os.sched_param(priority))
+    except (PermissionError, OSError):
+        return False
+    return True
+
+
+def make_ordinary() -> None:
+    """Return the calling thread to the ordinary time-sharing class."""
+    with contextlib.suppress(PermissionError, OSError, AttributeError):
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))

@@ -46,6 +46,7 @@ log = logging.getLogger(__name__)
 
 LIVE = ("starting", "waiting", "running")
 HANG_POLL_S = 0.02  # [s] how often a starting race checks its controllers' resets
+POSE_COLUMNS = [st.F_X, st.F_Y, st.F_HEADING, st.F_SPEED]
 
 
 class Scene(Protocol):
@@ -140,7 +141,9 @@ class RaceSession:
         self.schedule: TickSchedule | None = None
         self.scene: Scene | None = None
         self.result: dict[str, Any] | None = None
-        self.replay = Replay(config.track.name, DT)
+        self._poses = np.zeros((0, len(self.drivers), 6))  # per step and kart: x, y, heading, speed, steer, throttle
+        self._recorded = 0  # steps in _poses
+        self._plans: list[dict[str, Any]] = []  # plans as they were applied (the replay's)
         self.plans_version = 0
         self.error: str | None = None
         self._threads: dict[int, DriverThread] = {}  # AI kart -> its controller's thread
@@ -215,7 +218,8 @@ class RaceSession:
 
     def replay_dict(self) -> dict[str, Any]:
         """The replay so far in the headless format (``controllers.race.Replay``) plus the race id and karts."""
-        return {"race_id": self.id, "karts": self.kart_list(), **asdict(self.replay)}
+        replay = Replay(self.config.track.name, DT, self._poses[: self._recorded].tolist(), list(self._plans))
+        return {"race_id": self.id, "karts": self.kart_list(), **vars(replay)}
 
     def kart_list(self) -> list[dict[str, Any]]:
         """``[{index, name, controller}]``."""
@@ -252,6 +256,8 @@ class RaceSession:
         config = self.config
         params = SimParams(kart=kart_preset(config.kart_preset))
         self.world = world = await asyncio.to_thread(self._build_world, params)
+        # preallocated up to the time limit: a growing list of lists would give the garbage collector work
+        self._poses = np.zeros((int(world.rule_vector[st.RP_TIME_LIMIT_STEPS]) + 1, len(self.drivers), 6))
         n = len(self.drivers)
         limit = world.lane_change_limit
         contexts = {
@@ -340,14 +346,12 @@ class RaceSession:
         observations = observe(world, 0)
         self._submit(observations)
         self._request_plans(observations)
-        self.replay.poses.append(
-            [[*pose, steer, throttle] for pose, (steer, throttle) in zip(self._poses(), self._actions[0].tolist())]
-        )
+        if self._recorded < len(self._poses):
+            pose = self._poses[self._recorded]
+            pose[:, :4] = world.fstate[0][:, POSE_COLUMNS]
+            pose[:, 4:] = self._actions[0]
+            self._recorded += 1
         self._publish()
-
-    def _poses(self) -> list[list[float]]:
-        assert self.world is not None
-        return self.world.fstate[0][:, [st.F_X, st.F_Y, st.F_HEADING, st.F_SPEED]].tolist()
 
     def _human_input(self, d: KartDriver, now: float, speed: float) -> None:
         received = d.input
@@ -445,7 +449,7 @@ class RaceSession:
         d.waypoints = tuple(w.position for w in plan.ego_waypoints)
         d.predicted = tuple(w.position for ws in plan.opponent_waypoints().values() for w in ws)
         self.plans_version += 1
-        self.replay.plans.append({"step": int(self.world.steps[0]), "kart": d.index, "plan": asdict(plan)})
+        self._plans.append({"step": int(self.world.steps[0]), "kart": d.index, "plan": asdict(plan)})
 
     # ------------------------------------------------------------------ frames
     def _publish(self) -> None:
