@@ -62,11 +62,12 @@ class ControllerSpec:
 
 
 def _mcts_lqng() -> Controller:
-    return HierarchicalController("mcts-lqng", MCTSPlanner(), LQNGTracker())
+    # the game's speed bins are coarse: planned speeds are a ceiling 3 m/s above the bin, the line's profile binds
+    return HierarchicalController("mcts-lqng", MCTSPlanner(), LQNGTracker(LQNGParams(speed_margin=3.0)))
 
 
 def _fixed_lqng() -> Controller:
-    fixed = LQNGParams(weights=LQNGWeights(heading=1.9, deny=0.1, avoid_scale=0.45))
+    fixed = LQNGParams(traffic_lane_tolerance=1.25, weights=LQNGWeights(heading=1.9, deny=0.1, avoid_scale=0.45))
     return HierarchicalController("fixed-lqng", FixedLinePlanner(), LQNGTracker(fixed))
 
 

@@ -26,6 +26,7 @@ def random_state(rng: np.random.Generator, tb, n_players: int, checkpoint: int) 
     for p in range(n_players):
         state[p, dg.CHECKPOINT] = checkpoint
         state[p, dg.LANE] = lanes[p]
+        state[p, dg.PREV_LANE] = lanes[p]
         state[p, dg.BIN] = rng.integers(0, len(tb.bin_low))
         state[p, dg.TIME] = rng.integers(0, 150)
         state[p, dg.WEAR] = rng.integers(0, 8000)
@@ -76,10 +77,27 @@ def test_random_legal_play_never_breaks_a_rule(seed: int, key, n_players: int, s
                 tb.bin_low[vbin]
                 <= dg.corner_speed(tb, tb.corner_radius[c, before[dg.LANE], lane], int(before[dg.WEAR])) + 1e-9
             )
-            # collision pruning: nobody already at this checkpoint in this lane within the window
+            # collision pruning: nobody already at this checkpoint within the window in this lane, or with the
+            # two paths crossing (the sides swapped since the previous checkpoint)
             for q in range(n_players):
-                if q != p and state[q, dg.CHECKPOINT] == round_cp + 1 and state[q, dg.LANE] == lane:
-                    assert abs(state[q, dg.TIME] - state[p, dg.TIME]) >= tb.collision_window
+                if q == p or state[q, dg.CHECKPOINT] != round_cp + 1:
+                    continue
+                if abs(state[q, dg.TIME] - state[p, dg.TIME]) < tb.collision_window:
+                    assert state[q, dg.LANE] != lane
+                    side_before = np.sign(int(before[dg.LANE]) - int(state[q, dg.PREV_LANE]))
+                    side_after = np.sign(lane - int(state[q, dg.LANE]))
+                    assert side_before * side_after >= 0
+            # no dead end: the next section can still be braked for from the arrival speed
+            nxt = (c + 1) % n
+            v1 = 0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin])  # the next move starts from the bin's middle
+            entries = [
+                np.sqrt(
+                    dg.corner_speed(tb, tb.corner_radius[nxt, lane, j], int(before[dg.WEAR])) ** 2
+                    + 2 * tb.brake * tb.distance[nxt, lane, j]
+                )
+                for j in range(4)
+            ]
+            assert v1 <= max(entries) + 1e-9
             assert state[p, dg.TIME] > before[dg.TIME]
             assert state[p, dg.WEAR] >= before[dg.WEAR]
 
@@ -119,3 +137,43 @@ def test_terminal_values_reward_the_earlier_arrival() -> None:
     assert out[0] == pytest.approx(0.7) and out[1] == pytest.approx(0.3)
     dg.terminal_values(tb, state[:1], np.array([600.0]), out[:1])
     assert out[0] == pytest.approx(0.5 + 0.5 * 1.0)  # alone, a full second faster than the reference
+
+
+def test_a_lone_kart_never_runs_into_a_dead_end() -> None:
+    """From any lane at any checkpoint, always taking the fastest legal move completes a lap (default 1 m/s
+    bins; with 2 m/s bins a few two-section dead ends remain, which the search then avoids by losing)."""
+    from controllers.tactical.mcts import greedy_line
+
+    for name in ("oval", "complex"):
+        tb = TABLES[(name, 1.0)]
+        n = len(tb.straight)
+        for start in range(n):
+            for lane in range(4):
+                state = np.zeros((1, dg.N_FIELDS), dtype=np.int64)
+                state[0, dg.CHECKPOINT] = start
+                state[0, dg.LANE] = state[0, dg.PREV_LANE] = lane
+                state[0, dg.BIN] = 0
+                out = np.zeros((n, 2), dtype=np.int64)
+                assert greedy_line(tb, state, start, start + n, out) == n
+
+
+def test_players_side_by_side_may_not_swap_sides() -> None:
+    tb = TABLES[("oval", 1.0)]
+    # player 1 (lane 2, 0-based 1) reached checkpoint 1 from lane 2 at t = 1.00 s; player 0 comes from lane 3
+    state = np.zeros((2, dg.N_FIELDS), dtype=np.int64)
+    state[:, dg.CHECKPOINT] = (0, 1)
+    state[:, dg.LANE] = (2, 1)
+    state[:, dg.PREV_LANE] = (2, 1)
+    state[:, dg.BIN] = (5, 5)
+    state[:, dg.TIME] = (0, 100)
+    moves = np.empty(64, dtype=np.int64)
+    count = dg.legal_moves(tb, state, 0, moves)
+    arrivals = {}
+    for m in moves[:count]:
+        lane, _ = divmod(int(m), len(tb.bin_low))
+        arrival, _, _ = dg.move_outcome(tb, state, 0, lane, int(m) % len(tb.bin_low))
+        arrivals.setdefault(lane, []).append(arrival)
+    # arriving within the window in lane 1 (across player 1) or lane 2 (its lane) is ruled out
+    for lane in (0, 1):
+        assert all(abs(a - 100) >= tb.collision_window for a in arrivals.get(lane, []))
+    assert arrivals.get(2) or arrivals.get(3)

@@ -30,12 +30,10 @@ from sim_core.observation import KartView, Observation
 from sim_core.params import DT
 from sim_core.track import Track
 
-LANE_TOLERANCE = 1.25  # [m] a waypoint lane within this of the racing line needs no correction
 
-
-def _lane_correction(lane_offset: float, line_offset: float) -> float:
+def _lane_correction(lane_offset: float, line_offset: float, tolerance: float) -> float:
     gap = lane_offset - line_offset
-    return 0.0 if abs(gap) <= LANE_TOLERANCE else gap - math.copysign(LANE_TOLERANCE, gap)
+    return 0.0 if abs(gap) <= tolerance else gap - math.copysign(tolerance, gap)
 
 
 @dataclass(frozen=True)
@@ -62,6 +60,10 @@ class LQNGParams:
     min_lookahead: float = 3.0  # [m]
     speed_margin: float = 1.0  # [m/s] added to planned speeds (the original added 2 bin widths)
     braking_use: float = 0.8  # fraction of the braking limit the speed target assumes
+    lane_tolerance: float = 1.25  # [m] a waypoint lane within this of the racing line needs no correction
+    # [m] the same with another kart within avoid_radius: planned lanes are then driven as planned, or two karts
+    # planned into neighbouring lanes would both close onto the line and touch
+    traffic_lane_tolerance: float = 0.0
     weights: LQNGWeights = LQNGWeights()
 
 
@@ -92,7 +94,9 @@ class LQNGTracker:
             ahead.append(Waypoint(checkpoint, lane, (float(point[0]), float(point[1])), 15.0, 0.0))
         return ahead[0], ahead[1]
 
-    def _aim(self, track: Track, kart: KartView, first: Waypoint, second: Waypoint) -> tuple[float, float]:
+    def _aim(
+        self, track: Track, kart: KartView, first: Waypoint, second: Waypoint, tolerance: float
+    ) -> tuple[float, float]:
         """Pure-pursuit aim point on the path blending the kart's lateral offset into the waypoints' lanes."""
         p = self.params
         lookahead = max(p.min_lookahead, abs(kart.speed) * p.lookahead_time)
@@ -106,8 +110,8 @@ class LQNGTracker:
         assert self._line is not None
         line = self._line
         aim_s = kart.progress + lookahead
-        c1 = _lane_correction(d1, float(line.offset_at(kart.progress + s1)))
-        c2 = _lane_correction(d2, float(line.offset_at(kart.progress + s2)))
+        c1 = _lane_correction(d1, float(line.offset_at(kart.progress + s1)), tolerance)
+        c2 = _lane_correction(d2, float(line.offset_at(kart.progress + s2)), tolerance)
         c_now = kart.lateral - float(line.offset_at(kart.progress))
         if lookahead <= s1:
             correction = c_now + (c1 - c_now) * lookahead / max(s1, 1e-6)
@@ -139,6 +143,7 @@ class LQNGTracker:
         me = observation.me
         others = [k for k in observation.others() if math.hypot(k.x - me.x, k.y - me.y) < w.avoid_radius]
         players = [me, *others]
+        tolerance = self.params.traffic_lane_tolerance if others else self.params.lane_tolerance
         n = 4 * len(players)
         A = np.eye(n)
         B: list[np.ndarray] = []
@@ -155,7 +160,7 @@ class LQNGTracker:
             # positions relative to the ego kart keep the numbers small
             x0[s : s + 3] = (k.x - me.x, k.y - me.y, k.speed)
             first, second = self._upcoming(track, k, plan, k.index)
-            ax, ay = self._aim(track, k, first, second)
+            ax, ay = self._aim(track, k, first, second, tolerance)
             heading_error = math.remainder(math.atan2(ay - k.y, ax - k.x) - k.heading, 2.0 * math.pi)
             speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
             targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))

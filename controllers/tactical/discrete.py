@@ -25,7 +25,8 @@ BIN = 2  # velocity bin
 TIME = 3  # [0.01 s] time state relative to the root's leader
 WEAR = 4  # [1e-4] tyre wear
 LANE_COUNT = 5  # eq. (9) counter
-N_FIELDS = 6
+PREV_LANE = 6  # 0-based lane at the previous checkpoint (to tell when two players' paths cross)
+N_FIELDS = 7
 
 NO_PLAYER = -1
 
@@ -66,8 +67,9 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
     """(time after the move, new lane-change count, legal flag 0/1) of player ``p`` choosing ``lane``/``vbin``.
 
     Illegal: over the lane-change limit on a straight, arriving above the cornering speed, boundary
-    conditions the 1-D motion cannot meet, and (when pruning is on) arriving in the lane of a player who
-    already reached that checkpoint this round within the collision window.
+    conditions the 1-D motion cannot meet, arriving faster than the next section can brake from, and (when
+    pruning is on) arriving within the collision window of a player who already reached that checkpoint this
+    round, in its lane or on its other side (the paths cross).
     """
     n = tb.straight.shape[0]
     c = state[p, CHECKPOINT] % n
@@ -87,16 +89,28 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
     t = segment_time(tb.distance[c, here, lane], v0, v1, tb.accel, tb.brake, v_max)
     if t < 0.0:
         return 0, 0, 0
+    # no arriving so fast that the next section cannot brake down to its own corner speed (a dead end)
+    # (or into a lane from which no lane of the next section is reachable at the lowest speed bin)
+    nxt = (c + 1) % n
+    wear_then = worn_after(tb, state[p, WEAR], tb.turn_angle[c])
+    entry = 0.0
+    for j in range(tb.distance.shape[1]):
+        _, blocked = lane_change_update(count, lane, j, tb.straight[nxt], tb.straight[(nxt + 1) % n], tb.lane_limit)
+        v_next = corner_speed(tb, tb.corner_radius[nxt, lane, j], wear_then)
+        if blocked or v_next < tb.bin_low[0]:
+            continue
+        entry = max(entry, math.sqrt(v_next * v_next + 2.0 * tb.brake * tb.distance[nxt, lane, j]))
+    # the next move starts from the bin's middle speed, whatever the arrival was capped to
+    if 0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin]) > entry + 1e-9:
+        return 0, 0, 0
     arrival = state[p, TIME] + int(t * 100.0 + 0.5)
     if tb.collision_window > 0:
         target = state[p, CHECKPOINT] + 1
         for q in range(state.shape[0]):
-            if (
-                q != p
-                and state[q, CHECKPOINT] == target
-                and state[q, LANE] == lane
-                and abs(state[q, TIME] - arrival) < tb.collision_window
-            ):
+            if q == p or state[q, CHECKPOINT] != target or abs(state[q, TIME] - arrival) >= tb.collision_window:
+                continue
+            # the same lane, or swapping sides with the other on the way (side by side, the paths cross)
+            if state[q, LANE] == lane or (here - state[q, PREV_LANE]) * (lane - state[q, LANE]) < 0:
                 return 0, 0, 0
     return arrival, count, 1
 
@@ -127,6 +141,7 @@ def apply_move(tb: GameTables, state: np.ndarray, p: int, action: int) -> bool:
     c = state[p, CHECKPOINT] % tb.straight.shape[0]
     state[p, WEAR] = worn_after(tb, state[p, WEAR], tb.turn_angle[c])
     state[p, CHECKPOINT] += 1
+    state[p, PREV_LANE] = state[p, LANE]
     state[p, LANE] = lane
     state[p, BIN] = vbin
     state[p, TIME] = arrival

@@ -334,14 +334,18 @@ class SearchTree:
             child = int(self.next_sibling[child])
         return out
 
-    def principal_variation(self) -> list[int]:
-        """Nodes from the root following the most visited child (ties: higher mean value)."""
+    def principal_variation(self, min_visits: int = 1) -> list[int]:
+        """Nodes from the root following the most visited child (ties: higher mean value), as long as that
+        child has at least ``min_visits`` visits (deeper choices rest on too few samples to trust)."""
         path = [0]
         while True:
             kids = self.children(path[-1])
             if not kids:
                 return path
-            path.append(max(kids, key=self._rank))
+            best = max(kids, key=self._rank)
+            if len(path) > 1 and int(self.visits[best]) < min_visits:
+                return path
+            path.append(best)
 
     def _rank(self, node: int) -> tuple[int, float]:
         visits = int(self.visits[node])

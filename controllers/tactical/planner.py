@@ -20,6 +20,7 @@ DEFAULT_EXPLORATION = 0.2  # UCT constant (values in [0, 1], value_scale 1 s): b
 DEFAULT_GREEDY = 0.8  # probability that a rollout move is the fastest legal one
 WALL_CLOCK_CHUNK = 250  # iterations between wall-clock checks when a time cap is set
 TREE_CAPACITY_PLANS = 8  # a reused tree grows for up to this many plans' budgets before it starts afresh
+PLAN_MIN_VISITS = 30  # a plan follows the search tree only through choices visited at least this often
 
 
 @dataclass(frozen=True)
@@ -135,6 +136,7 @@ class TacticalPlanner:
             times.append(t)
             state[row, dg.CHECKPOINT] = leader_cp
             state[row, dg.LANE] = p.lane - 1
+            state[row, dg.PREV_LANE] = p.lane - 1
             state[row, dg.BIN] = self.speed_bin(p.speed)
             state[row, dg.WEAR] = round(min(max(p.wear, 0.0), 1.0) * WEAR_UNITS)
             state[row, dg.LANE_COUNT] = p.lane_changes
@@ -181,7 +183,7 @@ class TacticalPlanner:
         tb = self.tables
         bins = len(tb.bin_low)
         per_player: dict[int, list[Waypoint]] = {k: [] for k in karts}
-        path = tree.principal_variation()
+        path = tree.principal_variation(PLAN_MIN_VISITS)
         moves = [(int(tree.mover[tree.parent[node]]), int(tree.action[node]), tree.state[node]) for node in path[1:]]
         # beyond the searched tree the plan continues with everyone's fastest legal moves
         state = tree.state[path[-1]].copy()

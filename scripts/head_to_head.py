@@ -1,0 +1,73 @@
+"""A series of headless races between two registered controllers, start lanes alternating, with the paper's
+per-race figures summed up. Prints one line per race and a JSON summary as the last line.
+
+    .venv/bin/python scripts/head_to_head.py --track complex --karts mcts-lqng,fixed-lqng --races 50
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+
+import typer
+
+from controllers.race import RaceSpec, run_race
+
+app = typer.Typer(add_completion=False)
+
+
+@app.command()
+def main(
+    track: str = typer.Option("complex", help="built-in track name or track JSON"),
+    karts: str = typer.Option("mcts-lqng,fixed-lqng", help="two registered controllers, comma separated"),
+    races: int = typer.Option(50, min=1),
+    first_seed: int = typer.Option(0),
+) -> None:
+    """Race ``karts`` ``races`` times; kart 0 starts in lane 2 in even races and lane 3 in odd ones."""
+    names = tuple(karts.split(","))
+    if len(names) != 2:
+        raise typer.BadParameter("give exactly two controllers")
+    wins = [0, 0]
+    finished = [0, 0]
+    per_kart: list[dict[str, list[float]]] = [
+        {"faults": [], "illegal": [], "safety": [], "delta_r": [], "delta_v": [], "time": []} for _ in names
+    ]
+    for i in range(races):
+        seed = first_seed + i
+        lanes = (2, 3) if i % 2 == 0 else (3, 2)
+        outcome = run_race(RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes))
+        result = outcome.result
+        if result.winner is not None:
+            wins[result.winner] += 1
+        for k, kart in enumerate(result.karts):
+            stats = per_kart[k]
+            finished[k] += kart.finished
+            stats["faults"].append(kart.collisions_at_fault)
+            stats["illegal"].append(kart.illegal_lane_changes)
+            stats["safety"].append(kart.safety_score)
+            if kart.delta_r is not None:
+                stats["delta_r"].append(kart.delta_r)
+            if kart.delta_v is not None:
+                stats["delta_v"].append(kart.delta_v)
+            if kart.finish_time is not None:
+                stats["time"].append(kart.finish_time)
+        figures = [
+            f"{names[k]} {kart.finish_time or float('nan'):.2f}s "
+            f"f{kart.collisions_at_fault} i{kart.illegal_lane_changes}"
+            for k, kart in enumerate(result.karts)
+        ]
+        print(f"race {i:3d} seed {seed} lanes {lanes} winner {result.winner} | " + " | ".join(figures), flush=True)
+    summary = {
+        "track": track,
+        "races": races,
+        "wins": dict(zip(names, wins, strict=True)),
+        "completion": dict(zip(names, [f / races for f in finished], strict=True)),
+    }
+    for k, name in enumerate(names):
+        stats = per_kart[k]
+        summary[name] = {key: round(statistics.fmean(values), 3) if values else None for key, values in stats.items()}
+    print(json.dumps(summary))
+
+
+if __name__ == "__main__":
+    app()

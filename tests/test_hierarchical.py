@@ -1,0 +1,62 @@
+"""The MCTS planner part keeps the racing line's lanes where no kart interacts, without ever breaking the
+lane-change rule to get there."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as hs
+
+from controllers.base import RaceContext
+from controllers.hierarchical import INTERACTION_WINDOW, MCTSPlanner, _lanes_legal
+from controllers.tactical.planner import Plan, Waypoint
+from sim_core.observation import observe
+from sim_core.params import PAPER_KART, SimParams
+from sim_core.track_io import get_track
+from sim_core.world import World
+
+TRACK = get_track("complex")
+PLANNER = MCTSPlanner(iterations=50)
+PLANNER.reset(RaceContext(TRACK, PAPER_KART, 0, 2, TRACK.lane_change_limit, 0))
+WORLD = World(TRACK, 1, 2, SimParams(kart=PAPER_KART))
+WORLD.reset(start_lanes=(2, 3))
+OBSERVATION = observe(WORLD, 0)[0]
+
+
+def _waypoints(lanes: list[int], first: int, times: list[float]) -> tuple[Waypoint, ...]:
+    points = [TRACK.lane_point(first + i, lane) for i, lane in enumerate(lanes)]
+    return tuple(
+        Waypoint(first + i, lane, (float(p[0]), float(p[1])), 12.0, t)
+        for i, (lane, p, t) in enumerate(zip(lanes, points, times, strict=True))
+    )
+
+
+@settings(max_examples=150)
+@given(
+    ego_lanes=hs.lists(hs.integers(1, 4), min_size=8, max_size=8),
+    other_lanes=hs.lists(hs.integers(1, 4), min_size=8, max_size=8),
+    gap=hs.floats(-2.0, 2.0),
+)
+def test_snapping_to_the_line_never_breaks_the_lane_change_rule(
+    ego_lanes: list[int], other_lanes: list[int], gap: float
+) -> None:
+    me = OBSERVATION.me
+    limit = TRACK.lane_change_limit
+    first = me.checkpoints_passed + 1
+    times = [0.8 * (i + 1) for i in range(8)]
+    ego = _waypoints(ego_lanes, first, times)
+    if not _lanes_legal(TRACK, me.lane, me.lane_changes, list(ego), limit):
+        return  # the search only ever returns legal plans
+    other = _waypoints(other_lanes, first, [t + gap for t in times])
+    plan = Plan(0, first - 1, {0: ego, 1: other}, 50, 1, 0.0)
+    snapped = PLANNER._prefer_racing_line(plan, OBSERVATION)
+    out = list(snapped.ego_waypoints)
+    assert _lanes_legal(TRACK, me.lane, me.lane_changes, out, limit)
+    assert snapped.waypoints[1] == other  # predictions untouched
+    for before, after in zip(ego, out, strict=True):
+        assert after.checkpoint == before.checkpoint and after.speed == before.speed
+        if after.lane != before.lane:
+            # only moved onto the line's lane, and only where no other kart is predicted close in time
+            assert after.lane == PLANNER._line_lanes[after.checkpoint % TRACK.n_checkpoints]
+            assert abs(gap) >= INTERACTION_WINDOW
+            assert np.allclose(after.position, TRACK.lane_point(after.checkpoint, after.lane))
