@@ -3,6 +3,8 @@ lane-change rule to get there."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as hs
@@ -31,16 +33,19 @@ def _waypoints(lanes: list[int], first: int, times: list[float]) -> tuple[Waypoi
     )
 
 
-@settings(max_examples=150)
+@settings(max_examples=300)
 @given(
     ego_lanes=hs.lists(hs.integers(1, 4), min_size=8, max_size=8),
     other_lanes=hs.lists(hs.integers(1, 4), min_size=8, max_size=8),
     gap=hs.floats(-2.0, 2.0),
+    start_lane=hs.integers(1, 4),
+    start_count=hs.integers(0, 4),
 )
 def test_snapping_to_the_line_never_breaks_the_lane_change_rule(
-    ego_lanes: list[int], other_lanes: list[int], gap: float
+    ego_lanes: list[int], other_lanes: list[int], gap: float, start_lane: int, start_count: int
 ) -> None:
-    me = OBSERVATION.me
+    me = replace(OBSERVATION.me, lane=start_lane, lane_changes=start_count)
+    observation = replace(OBSERVATION, karts=(me, *OBSERVATION.karts[1:]))
     limit = TRACK.lane_change_limit
     first = me.checkpoints_passed + 1
     times = [0.8 * (i + 1) for i in range(8)]
@@ -49,7 +54,7 @@ def test_snapping_to_the_line_never_breaks_the_lane_change_rule(
         return  # the search only ever returns legal plans
     other = _waypoints(other_lanes, first, [t + gap for t in times])
     plan = Plan(0, first - 1, {0: ego, 1: other}, 50, 1, 0.0)
-    snapped = PLANNER._prefer_racing_line(plan, OBSERVATION)
+    snapped = PLANNER._prefer_racing_line(plan, observation)
     out = list(snapped.ego_waypoints)
     assert _lanes_legal(TRACK, me.lane, me.lane_changes, out, limit)
     assert snapped.waypoints[1] == other  # predictions untouched
