@@ -1,1 +1,3 @@
-"""controllers package (filled in by later issues)."""
+"""Drivers: the controller Protocol and registry, planners, trackers and headless races."""
+
+from sim_core import _jit_cache  # noqa: F401  (must configure numba's cache before numba is imported)
