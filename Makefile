@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 
-.PHONY: setup run test lint bench tracks clean
+.PHONY: setup browser run test lint bench tracks clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -17,10 +17,13 @@ $(STAMP): pyproject.toml
 
 setup: $(STAMP)
 
-run: setup  ## set up, then run a headless race on the paper's oval (the server replaces this in issue 5)
-	$(BIN)/karting race --track oval --karts mcts-lqng,fixed-lqng
+browser:  ## Debian's chromium for the real-browser test (Playwright cannot download browsers here)
+	bash scripts/install_browser.sh
 
-test: setup  ## set up, then lint and run every test
+run: setup  ## set up, then start the race server on embedded defaults (SQLite file, local workers)
+	$(BIN)/karting serve
+
+test: setup browser  ## set up, then lint and run every test
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q
 
