@@ -163,7 +163,7 @@ def stand_in_app() -> FastAPI:
 
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        world = World(track, n_karts=2, laps=1)
+        world = World(track, n_karts=2, laps=3)
         scene = RaceScene(track, names, "demo race")
         state["scene"] = scene
         task = asyncio.create_task(drive(world, scene))
@@ -181,12 +181,12 @@ def stand_in_app() -> FastAPI:
         "id": "demo",
         "status": "running",
         "track": "oval",
-        "laps": 1,
+        "laps": 3,
         "karts": [{"name": n, "controller": c} for n, c in names],
         "standings": [0, 1],
     }
     app.get("/api/races")(lambda: [race])
-    app.get("/api/tracks")(lambda: [{"name": "oval", "length_m": track.length, "laps": 1, "n_checkpoints": 24}])
+    app.get("/api/tracks")(lambda: [{"name": "oval", "length_m": track.length, "laps": 3, "n_checkpoints": 24}])
     app.get("/api/controllers")(lambda: [{"name": "lane-follower", "description": "", "parameters": {}}])
     return app
 
@@ -279,7 +279,7 @@ def test_viewer_in_a_real_browser(live_race: tuple[str, str, str]) -> None:
             calls = page.evaluate("() => window.__viserTestpoints?.rendererInfo?.render?.calls ?? -1")
             assert calls != 0, "the renderer draws nothing"
             # the canvas is nearly transparent until the environment map is ready (slow with software WebGL)
-            page.wait_for_function("() => ['', '1'].includes(window.__viserMutable.canvas.style.opacity)")
+            page.wait_for_function("() => ['', '1'].includes(window.__viserMutable?.canvas?.style.opacity)")
             page.screenshot(path=str(ARTIFACTS / "viewer.png"))
         finally:
             browser.close()

@@ -234,6 +234,22 @@ def test_update_never_raises_and_close_is_idempotent(caplog: pytest.LogCaptureFi
         s.bind(("127.0.0.1", port))
 
 
+def test_hud_shows_standings_and_escapes_names() -> None:
+    track = get_track("oval")
+    hostile = "<img src=x onerror=alert(1)> | *b*"
+    scene = RaceScene(track, [(hostile, "human"), ("B", "fixed-lqng")], "escaping")
+    try:
+        assert "<img" not in scene._hud.content
+        frame = make_frame(track, 2)
+        karts = (KartFrame(**{**frame.karts[0].__dict__, "name": hostile}), frame.karts[1])
+        scene.update(RaceFrame(**{**frame.__dict__, "karts": karts}))
+        content = scene._hud.content
+        assert "<img" not in content and "&lt;img" in content and "\\|" in content and "\\*b\\*" in content
+        assert "Driver 1" in content and "18" in content  # kart 0 at 5 m/s = 18 km/h
+    finally:
+        scene.close()
+
+
 # ---------------------------------------------------------------------------------------------- relay
 class ServerThread:
     """uvicorn serving ``app`` on a free local port from a background thread."""
@@ -295,7 +311,9 @@ def test_pages(relay_app: tuple[ServerThread, RaceScene]) -> None:
         start = client.get("/")
         assert start.status_code == 200 and start.headers["content-type"].startswith("text/html")
         assert "HeadToHead Karting" in start.text and "/assets/start.js" in start.text
-        for asset, kind in (("start.js", "javascript"), ("drive.js", "javascript"), ("style.css", "css")):
+        assets = ("start.js", "drive.js", "drive-worker.js", "common.js", "viewer-wait.js", "style.css")
+        for asset in assets:
+            kind = "css" if asset.endswith(".css") else "javascript"
             response = client.get(f"/assets/{asset}")
             assert response.status_code == 200 and kind in response.headers["content-type"]
         assert client.get("/assets/nope.js").status_code == 404
@@ -310,7 +328,9 @@ def test_pages(relay_app: tuple[ServerThread, RaceScene]) -> None:
         assert redirect.status_code in (301, 302, 307, 308)
         assert redirect.headers["location"].endswith("/races/r1/viewer/")
         missing = client.get("/races/nope/viewer/")
-        assert missing.status_code == 404 and "nope" in missing.text
+        assert missing.status_code == 404 and "nope" in missing.text and "viewer-wait.js" in missing.text
+        hostile = client.get("/races/<b>x/viewer/")
+        assert hostile.status_code == 404 and "<b>x" not in hostile.text
         drive = client.get("/races/r1/drive", params={"kart": 1, "token": "t"})
         assert drive.status_code == 200 and "/assets/drive.js" in drive.text
 

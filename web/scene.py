@@ -18,6 +18,7 @@ chosen kart. The viser server listens on 127.0.0.1 only; browsers reach it throu
 from __future__ import annotations
 
 import contextlib
+import html
 import io
 import logging
 import math
@@ -39,8 +40,8 @@ KART_CLEARANCE = 0.05  # [m] gap under the kart box
 WAYPOINT_POOL = 10  # green waypoint boxes per kart
 PREDICTION_POOL_PER_OPPONENT = 8  # orange prediction boxes per opponent (the planner's horizon)
 PREDICTION_POOL_MAX = 24
-WAYPOINT_SIZE = 0.7  # [m] edge of a green waypoint box
-PREDICTION_SIZE = 0.5  # [m] edge of an orange prediction box
+WAYPOINT_SIZE = 1.0  # [m] edge of a green waypoint box
+PREDICTION_SIZE = 0.7  # [m] edge of an orange prediction box
 WALL_HEIGHT = 0.6  # [m]
 HUD_PERIOD = 0.25  # [s] wall-clock time between HUD refreshes
 CAMERA_PERIOD = 0.05  # [s] wall-clock time between follow-camera moves (20 Hz)
@@ -58,8 +59,18 @@ CHECKPOINT_COLOR = (150, 40, 220)  # purple
 WAYPOINT_COLOR = (20, 200, 60)  # green
 PREDICTION_COLOR = (255, 140, 20)  # orange
 
-# A coloured square per grid slot for the markdown HUD (the nearest of the emoji squares to KART_COLORS).
-_HUD_SWATCHES = ("🟥", "🟦", "🟨", "🟩", "🟪", "🟧", "🟫", "⬛")
+_MARKDOWN_ESCAPES = str.maketrans({c: "\\" + c for c in "\\`*_[]|#!~"})
+
+
+def markdown_text(text: str) -> str:
+    """``text`` as literal markdown text: HTML and markdown syntax escaped (viser renders raw HTML unsanitised,
+    and display names come from users)."""
+    return html.escape(text.translate(_MARKDOWN_ESCAPES), quote=False)
+
+
+def _swatch(index: int) -> str:
+    r, g, b = KART_COLORS[index % len(KART_COLORS)]
+    return f'<span style="color: rgb({r}, {g}, {b})">■</span>'
 
 
 def heading_wxyz(heading: float) -> tuple[float, float, float, float]:
@@ -229,7 +240,8 @@ class RaceScene:
     def _build(self) -> None:
         server = self.server
         track = self.track
-        server.gui.configure_theme(show_share_button=False, control_layout="floating", control_width="medium")
+        server.gui.configure_theme(show_share_button=False, control_layout="floating", control_width="large")
+        server.scene.configure_environment_map("warehouse", environment_intensity=0.45)
         server.scene.set_up_direction("+z")
         scene = server.scene
 
@@ -238,7 +250,7 @@ class RaceScene:
         centre = 0.5 * (lo + hi)
         extent = float(max(hi[0] - lo[0], hi[1] - lo[1], 20.0))
         server.initial_camera.look_at = (float(centre[0]), float(centre[1]), 0.0)
-        server.initial_camera.position = (float(centre[0]), float(centre[1] - 0.75 * extent), 0.75 * extent)
+        server.initial_camera.position = (float(centre[0]), float(centre[1] - 0.6 * extent), 0.6 * extent)
 
         size = extent * 1.4
         scene.add_grid(
@@ -287,8 +299,8 @@ class RaceScene:
             scene.add_box(
                 f"/track/checkpoints/cp{c}",
                 color=CHECKPOINT_COLOR,
-                dimensions=(0.5, left + right, 0.12),
-                position=(float(mid[0]), float(mid[1]), 0.06),
+                dimensions=(0.6, left + right, 0.2),
+                position=(float(mid[0]), float(mid[1]), 0.1),
                 wxyz=heading_wxyz(heading),
                 opacity=0.85,
                 cast_shadow=False,
@@ -361,8 +373,18 @@ class RaceScene:
         self._waypoint_writers = [[_PoseWriter(node) for node in pool] for pool in self._waypoint_nodes]
         self._prediction_writers = [[_PoseWriter(node) for node in pool] for pool in self._prediction_nodes]
         self._hud = server.gui.add_markdown(self._hud_text(None), order=10.0)
+        legend = " · ".join(
+            f'<span style="color: rgb{color}">■</span> {what}'
+            for color, what in (
+                (CHECKPOINT_COLOR, "checkpoints"),
+                (WAYPOINT_COLOR, "planned waypoints"),
+                (PREDICTION_COLOR, "predicted opponents"),
+            )
+        )
         self._legend = server.gui.add_markdown(
-            "🟪 checkpoints · 🟩 planned waypoints · 🟧 predicted opponents", order=11.0
+            f"{legend}<br/>fault: collisions at fault · illegal LC: illegal lane changes · "
+            "drv. faults: driver errors and missed deadlines",
+            order=11.0,
         )
 
     # ------------------------------------------------------------------ per-viewer GUI
@@ -444,24 +466,27 @@ class RaceScene:
     def _hud_text(self, frame: RaceFrame | None) -> str:
         if frame is None:
             rows = [
-                f"| {_HUD_SWATCHES[i % len(_HUD_SWATCHES)]} {name} | – | – | – | – | – | – |"
+                f"| {_swatch(i)} {markdown_text(name)} | – | – | – | – | – | – |"
                 for i, (name, _) in enumerate(self.karts)
             ]
-            head = f"**{self.track.name}** · waiting for the start"
+            head = f"**{markdown_text(self.track.name)}** · waiting for the start"
         else:
             rows = []
             for k in sorted(frame.karts, key=lambda k: k.position):
                 if k.finished:
-                    lap = "🏁 " + (f"{k.finish_time:.2f} s" if k.finish_time is not None else "")
+                    lap = "✓ " + (f"{k.finish_time:.2f} s" if k.finish_time is not None else "")
                 else:
                     lap = str(k.lap)
                 rows.append(
-                    f"| {_HUD_SWATCHES[k.index % len(_HUD_SWATCHES)]} {k.name} | {k.position} | {lap} | "
+                    f"| {_swatch(k.index)} {markdown_text(k.name)} | {k.position} | {lap} | "
                     f"{k.speed * 3.6:.0f} | {k.collisions_at_fault} | {k.illegal_lane_changes} | "
                     f"{k.controller_faults} |"
                 )
-            head = f"**{frame.track}** · {frame.status} · {frame.time:.1f} s · {frame.laps} laps"
-        table = "| kart | pos | lap | km/h | at fault | illegal LC | faults |\n|---|---|---|---|---|---|---|\n"
+            head = (
+                f"**{markdown_text(frame.track)}** · {markdown_text(frame.status)} · {frame.time:.1f} s · "
+                f"{frame.laps} laps"
+            )
+        table = "| kart | pos | lap | km/h | fault | illegal LC | drv. faults |\n|---|---|---|---|---|---|---|\n"
         return head + "\n\n" + table + "\n".join(rows)
 
 

@@ -1,12 +1,7 @@
-// Drive page: keyboard → ramped {steer, throttle} at 50 Hz over the race's drive websocket, live view beside it.
+// Drive page: keyboard → a worker that ramps {steer, throttle} and sends it at 50 Hz over the race's drive
+// websocket; the live 3D view beside it; the server's messages shown in the panel.
 "use strict";
 
-const SEND_PERIOD_MS = 20; // 50 Hz
-const STEER_RATE = 3.0; // [1/s] steer ramp towards the pressed direction
-const STEER_RETURN_RATE = 5.0; // [1/s] back to centre when released
-const THROTTLE_RATE = 2.5; // [1/s]
-const BRAKE_RATE = 6.0; // [1/s]
-const RELEASE_RATE = 4.0; // [1/s] throttle back to 0 when released
 const KEYS = {
   ArrowUp: "up", KeyW: "up", ArrowDown: "down", KeyS: "down",
   ArrowLeft: "left", KeyA: "left", ArrowRight: "right", KeyD: "right",
@@ -20,9 +15,8 @@ const token = params.get("token");
 const kartIndex = Number.isInteger(Number(kart)) ? Number(kart) : 0;
 
 const pressed = new Set();
-const input = {steer: 0, throttle: 0};
-let socket = null;
-let lastTick = performance.now();
+const input = {steer: 0, throttle: 0, seq: 0};
+const worker = new Worker("/assets/drive-worker.js");
 
 function $(id) { return document.getElementById(id); }
 
@@ -41,15 +35,21 @@ function setConn(state, text) {
 }
 
 // ------------------------------------------------------------------ keyboard
+function sendKeys() { worker.postMessage({cmd: "keys", pressed: [...pressed]}); }
+
 function onKey(event) {
   const action = KEYS[event.code] || KEYS[event.key];
   if (!action) return;
+  const had = pressed.has(action);
   if (event.type === "keydown") pressed.add(action); else pressed.delete(action);
+  if (had !== pressed.has(action)) sendKeys();
   event.preventDefault();
   event.stopImmediatePropagation(); // the 3D view would also move its camera with these keys
 }
 
-function releaseAll() { pressed.clear(); }
+function releaseAll() {
+  if (pressed.size) { pressed.clear(); sendKeys(); }
+}
 
 function attachKeys(target) {
   target.addEventListener("keydown", onKey, true);
@@ -57,46 +57,16 @@ function attachKeys(target) {
   target.addEventListener("blur", releaseAll);
 }
 
-function approach(value, target, rate, dt) {
-  const step = rate * dt;
-  return Math.abs(target - value) <= step ? target : value + Math.sign(target - value) * step;
-}
-
-function ramp(dt) {
-  const steerTarget = (pressed.has("left") ? 1 : 0) - (pressed.has("right") ? 1 : 0); // steer > 0 = left
-  const steerRate = steerTarget === 0 || Math.sign(steerTarget) !== Math.sign(input.steer) && input.steer !== 0
-    ? STEER_RETURN_RATE : STEER_RATE;
-  input.steer = approach(input.steer, steerTarget, steerRate, dt);
-  const throttleTarget = (pressed.has("up") ? 1 : 0) - (pressed.has("down") ? 1 : 0);
-  let rate = RELEASE_RATE;
-  if (throttleTarget > 0) rate = THROTTLE_RATE;
-  else if (throttleTarget < 0) rate = BRAKE_RATE;
-  input.throttle = approach(input.throttle, throttleTarget, rate, dt);
-}
-
 function showInput() {
-  const bar = (id, value) => {
+  const bar = (id, value, leftward) => {
     const fill = $(id);
     const width = Math.abs(value) * 50;
     fill.style.width = `${width}%`;
-    // steer > 0 is left: draw it to the left of the middle
-    const leftward = id === "steer-bar" ? value > 0 : value < 0;
     fill.style.left = leftward ? `${50 - width}%` : "50%";
     fill.style.background = id === "throttle-bar" && value < 0 ? "var(--bad)" : "var(--accent)";
   };
-  bar("steer-bar", input.steer);
-  bar("throttle-bar", input.throttle);
-}
-
-function tick() {
-  const now = performance.now();
-  const dt = Math.min((now - lastTick) / 1000, 0.1);
-  lastTick = now;
-  ramp(dt);
-  showInput();
-  if (socket && socket.readyState === WebSocket.OPEN) {
-    socket.send(JSON.stringify({steer: Number(input.steer.toFixed(3)), throttle: Number(input.throttle.toFixed(3))}));
-  }
+  bar("steer-bar", input.steer, input.steer > 0); // steer > 0 is left: drawn left of the middle
+  bar("throttle-bar", input.throttle, input.throttle < 0);
 }
 
 // ------------------------------------------------------------------ server messages
@@ -109,8 +79,7 @@ function pick(objects, keys) {
 }
 
 function ownKart(message) {
-  const candidates = [message.kart, message.you, message.self, message.state];
-  for (const c of candidates) if (c && typeof c === "object") return c;
+  for (const c of [message.kart, message.you, message.self]) if (c && typeof c === "object") return c;
   const karts = message.karts || (message.frame && message.frame.karts);
   if (Array.isArray(karts)) {
     return karts.find((k) => k && (k.index === kartIndex || k.kart === kartIndex)) || karts[kartIndex];
@@ -130,15 +99,18 @@ function showState(message) {
   if (position !== undefined) $("position").textContent = String(position);
   const status = pick([message, message.frame, message.race], ["status", "race_status"]);
   if (status !== undefined) $("race-status").textContent = String(status);
-  const time = pick([message, message.frame], ["time", "race_time", "t"]);
+  const time = pick([message, message.frame], ["time", "race_time"]);
   if (typeof time === "number") $("race-time").textContent = `${time.toFixed(1)} s`;
   if (mine && mine.name) $("kart-name").textContent = mine.name;
-  if (mine && mine.finished) $("lap").textContent = "finished" + (typeof mine.finish_time === "number" ? ` in ${mine.finish_time.toFixed(2)} s` : "");
+  if (mine && mine.finished) {
+    $("lap").textContent = "finished" + (typeof mine.finish_time === "number" ? ` in ${mine.finish_time.toFixed(2)} s` : "");
+  }
+  if (typeof message.braking === "boolean") $("braking").hidden = !message.braking;
 }
 
-function onMessage(event) {
+function onServerMessage(data) {
   let message;
-  try { message = JSON.parse(event.data); } catch (_) { log(String(event.data)); return; }
+  try { message = JSON.parse(data); } catch (_) { log(String(data)); return; }
   if (!message || typeof message !== "object") { log(String(message)); return; }
   const type = String(message.type || message.kind || "");
   if (message.error !== undefined || /error|reject|invalid/i.test(type)) {
@@ -146,11 +118,35 @@ function onMessage(event) {
     log(typeof problem === "string" ? problem : describeError(0, message), "error");
     return;
   }
+  if (type === "end" || type === "result") {
+    const result = message.result && typeof message.result === "object" ? message.result : null;
+    const winner = result && result.winner !== undefined && result.winner !== null ? `, winner: kart ${Number(result.winner) + 1}` : "";
+    log(`race over (${message.status || "finished"})${winner}`);
+  }
   const text = message.message || message.text || message.detail;
   if (typeof text === "string" && text) log(type ? `${type}: ${text}` : text);
-  else if (/^(info|notice|event|start|started|finish|finished|waiting|countdown|hello|welcome|ready)$/i.test(type)) log(type);
+  else if (/^(info|notice|event|start|started|waiting|countdown|hello|welcome|ready)$/i.test(type)) log(type);
   showState(message);
 }
+
+worker.onmessage = (event) => {
+  const m = event.data || {};
+  if (m.kind === "input") {
+    Object.assign(input, m);
+    showInput();
+  } else if (m.kind === "open") {
+    setConn("open", "connected: driving");
+    log("connected");
+  } else if (m.kind === "message") {
+    onServerMessage(m.data);
+  } else if (m.kind === "error") {
+    log("connection error", "error");
+  } else if (m.kind === "close") {
+    const reason = m.reason ? `: ${m.reason}` : "";
+    setConn("closed", `closed (${m.code}${reason})`);
+    log(`connection closed, code ${m.code}${reason}`, m.code === 1000 ? "" : "error");
+  }
+};
 
 // ------------------------------------------------------------------ connection
 function connect() {
@@ -163,20 +159,11 @@ function connect() {
   const scheme = location.protocol === "https:" ? "wss" : "ws";
   const url = `${scheme}://${location.host}/api/races/${encodeURIComponent(raceId)}/drive?kart=${encodeURIComponent(kart)}&token=${encodeURIComponent(token)}`;
   setConn("connecting", "connecting…");
-  socket = new WebSocket(url);
-  socket.addEventListener("open", () => { setConn("open", "connected: driving"); log("connected"); });
-  socket.addEventListener("message", onMessage);
-  socket.addEventListener("close", (event) => {
-    const reason = event.reason ? `: ${event.reason}` : "";
-    setConn("closed", `closed (${event.code}${reason})`);
-    log(`connection closed, code ${event.code}${reason}`, event.code === 1000 ? "" : "error");
-    socket = null;
-  });
-  socket.addEventListener("error", () => log("connection error", "error"));
+  worker.postMessage({cmd: "connect", url});
 }
 
 function init() {
-  $("title").textContent = `race ${raceId} · kart ${kart !== null ? Number(kart) + 1 : "?"}`;
+  $("title").textContent = `race ${raceId} · kart ${kart !== null ? kartIndex + 1 : "?"}`;
   $("kart-swatch").style.background = kartColor(kartIndex);
   $("kart-name").textContent = `kart ${kartIndex + 1}`;
   const frame = $("viewer");
@@ -194,11 +181,11 @@ function init() {
     }, 0);
   });
   window.addEventListener("focus", () => { $("focus-hint").hidden = true; });
+  window.addEventListener("pagehide", () => worker.postMessage({cmd: "close"}));
   $("focus-hint").addEventListener("click", () => $("panel").focus());
   $("reconnect").addEventListener("click", connect);
   document.addEventListener("visibilitychange", () => { if (document.hidden) releaseAll(); });
   connect();
-  setInterval(tick, SEND_PERIOD_MS);
   $("panel").focus();
 }
 

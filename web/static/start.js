@@ -52,6 +52,7 @@ function raceRow(race) {
   const live = LIVE.has(status);
   const viewerUrl = race.viewer_url || `/races/${encodeURIComponent(id)}/viewer/`;
   const resultUrl = race.result_url || `/api/races/${encodeURIComponent(id)}/result`;
+  const replayUrl = race.replay_url || `/api/races/${encodeURIComponent(id)}/replay`;
   const track = typeof race.track === "object" && race.track ? (race.track.name || JSON.stringify(race.track)) : race.track;
   return el("tr", {"data-race-id": id},
     el("td", {}, el("code", {title: id}, id.length > 10 ? id.slice(0, 8) + "…" : id)),
@@ -61,7 +62,8 @@ function raceRow(race) {
     el("td", {}, standingsCell(race)),
     el("td", {class: "small"},
       live ? el("div", {}, el("a", {href: viewerUrl, target: "_blank", rel: "noopener"}, "viewer")) : null,
-      el("div", {}, el("a", {href: resultUrl, target: "_blank", rel: "noopener"}, "result"))),
+      live ? null : el("div", {}, el("a", {href: resultUrl, target: "_blank", rel: "noopener"}, "result")),
+      live ? null : el("div", {}, el("a", {href: replayUrl, target: "_blank", rel: "noopener"}, "replay"))),
   );
 }
 
