@@ -1,40 +1,30 @@
 """One real-browser test: Debian's chromium (driven by Playwright) opens the start page and a live race viewer.
 
-Through the real server (``server.app.create_app``) when it exists: a temporary database, ``POST /api/races``
-(MCTS-LQNG vs Fixed-LQNG on the oval), then the start page must list the race and the viewer must connect, show
-both karts moving and the green waypoint boxes of the planners. Without the server app it runs the same checks
-against a stand-in app (the web router + a RaceScene fed by a World driven by the lane follower).
+Through the real server (``server.app.create_app`` under uvicorn, a temporary database): ``POST /api/races``
+(MCTS-LQNG vs Fixed-LQNG on the oval), then the start page must list the race, and the viewer must connect, show
+both karts moving and the green waypoint boxes of the planners, and its "Follow" dropdown must make the camera
+chase a kart. No request may leave the machine.
 
 viser's client exposes its three.js scene to tests (``window.__viserMutable.nodeRefFromName[name]``, viser
-1.1.x). The screenshot goes to ``test-artifacts/viewer.png``. Skipped only when no chromium binary is installed
-(``scripts/install_browser.sh`` installs one; Playwright's own download needs the internet).
+1.1.x). Screenshots go to ``test-artifacts/viewer.png`` (overview) and ``test-artifacts/viewer-follow.png``.
+Skipped only when no chromium binary is installed (``scripts/install_browser.sh`` installs Debian's;
+``playwright install`` needs the internet).
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import importlib.util
 import math
 import os
 import threading
 import time
-from collections.abc import AsyncIterator, Iterator
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import httpx
-import numpy as np
 import pytest
 import uvicorn
 from fastapi import FastAPI
-
-from sim_core import state as st
-from sim_core.track_io import get_track
-from sim_core.world import World
-from web.frame import KartFrame, RaceFrame
-from web.routes import make_web_router
-from web.scene import RaceScene
 
 ROOT = Path(__file__).resolve().parents[1]
 ARTIFACTS = ROOT / "test-artifacts"
@@ -58,18 +48,6 @@ CHROMIUM_ARGS = [
 def chromium_binary() -> str | None:
     """The first installed chromium binary, if any."""
     return next((path for path in CHROMIUM_CANDIDATES if path and os.access(path, os.X_OK)), None)
-
-
-def real_server_available() -> bool:
-    """Whether the race server's app factory and settings exist."""
-    try:
-        if importlib.util.find_spec("server.app") is None or importlib.util.find_spec("server.settings") is None:
-            return False
-        from server import app, settings
-
-        return hasattr(app, "create_app") and hasattr(settings, "Settings")
-    except ImportError:
-        return False
 
 
 pytestmark = pytest.mark.skipif(
@@ -100,121 +78,25 @@ class ServerThread:
         self.thread.join(30)
 
 
-def stand_in_app() -> FastAPI:
-    """The web router and a RaceScene fed at 50 Hz by a World whose karts follow lanes (no race server)."""
-    track = get_track("oval")
-    names = [("Lane 2", "lane-follower"), ("Lane 3", "lane-follower")]
-    state: dict[str, Any] = {}
-
-    def frame_of(world: World, version: int) -> RaceFrame:
-        n = track.n_checkpoints
-        order = world.standings(0)
-        karts = []
-        for k, (name, controller) in enumerate(names):
-            f, i = world.fstate[0, k], world.istate[0, k]
-            passed = int(i[st.I_CP_PASSED])
-            ahead = [track.lane_point(passed + 1 + j, 2 + (j + k) % 2) for j in range(6)]
-            others = [track.lane_point(passed + 1 + j, 3 - (j + k) % 2) for j in range(4)]
-            karts.append(
-                KartFrame(
-                    index=k,
-                    name=name,
-                    controller=controller,
-                    x=float(f[st.F_X]),
-                    y=float(f[st.F_Y]),
-                    heading=float(f[st.F_HEADING]),
-                    speed=float(f[st.F_SPEED]),
-                    steer=float(f[st.F_STEER]),
-                    throttle=float(f[st.F_THROTTLE]),
-                    lap=min(passed // n + 1, world.laps),
-                    position=order.index(k) + 1,
-                    checkpoints_passed=passed,
-                    lane=int(i[st.I_LANE]),
-                    collisions_at_fault=int(i[st.I_FAULTS]),
-                    illegal_lane_changes=int(i[st.I_ILLEGAL]),
-                    wall_hits=int(i[st.I_WALL_HITS]),
-                    finished=bool(i[st.I_FINISHED]),
-                    finish_time=None,
-                    controller_faults=0,
-                    waypoints=tuple((float(p[0]), float(p[1])) for p in ahead),
-                    predicted=tuple((float(p[0]), float(p[1])) for p in others),
-                )
-            )
-        status = "finished" if bool(world.done[0]) else "running"
-        return RaceFrame(
-            "demo", track.name, float(world.time[0]), int(world.steps[0]), world.laps, status, tuple(karts), version
-        )
-
-    async def drive(world: World, scene: RaceScene) -> None:
-        from controllers.lane_follower import LaneFollower
-
-        follower = LaneFollower(track, world.params.kart)
-        lateral = np.array([track.lane_offsets(0)[1], track.lane_offsets(0)[2]])
-        next_tick = time.monotonic()
-        while not bool(world.done[0]):
-            f = world.fstate[0]
-            actions = follower.act(
-                f[:, st.F_X : st.F_Y + 1], f[:, st.F_HEADING], f[:, st.F_SPEED], f[:, st.F_S], f[:, st.F_WEAR], lateral
-            )
-            world.step(actions[None, :, :])
-            scene.update(frame_of(world, int(world.steps[0]) // 25))
-            next_tick += 0.02
-            await asyncio.sleep(max(0.0, next_tick - time.monotonic()))
-
-    @contextlib.asynccontextmanager
-    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        world = World(track, n_karts=2, laps=3)
-        scene = RaceScene(track, names, "demo race")
-        state["scene"] = scene
-        task = asyncio.create_task(drive(world, scene))
-        try:
-            yield
-        finally:
-            task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
-            await asyncio.to_thread(scene.close)
-
-    app = FastAPI(lifespan=lifespan)
-    app.include_router(make_web_router(lambda race_id: state["scene"].port if race_id == "demo" else None))
-    race = {
-        "id": "demo",
-        "status": "running",
-        "track": "oval",
-        "laps": 3,
-        "karts": [{"name": n, "controller": c} for n, c in names],
-        "standings": [0, 1],
-    }
-    app.get("/api/races")(lambda: [race])
-    app.get("/api/tracks")(lambda: [{"name": "oval", "length_m": track.length, "laps": 3, "n_checkpoints": 24}])
-    app.get("/api/controllers")(lambda: [{"name": "lane-follower", "description": "", "parameters": {}}])
-    return app
-
-
 @pytest.fixture(scope="module")
-def live_race(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, str, str]]:
-    """(base URL, race id, "server" or "stand-in") of a running race."""
-    if real_server_available():
-        from server.app import create_app
-        from server.settings import Settings
+def live_race(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, str]]:
+    """(base URL, race id) of an MCTS-LQNG vs Fixed-LQNG race on the oval, on the real server (temporary DB)."""
+    from server.app import create_app
+    from server.settings import Settings
 
-        db = tmp_path_factory.mktemp("browser") / "karting.db"
-        app = create_app(Settings(database_url=f"sqlite:///{db}", port=0))
-        with ServerThread(app) as base:
-            body = {
-                "track": "oval",
-                "laps": 2,
-                "seed": 7,
-                "start_lanes": None,
-                "kart_preset": "paper",
-                "karts": [{"controller": "mcts-lqng", "name": "MCTS"}, {"controller": "fixed-lqng", "name": "Fixed"}],
-            }
-            response = httpx.post(f"{base}/api/races", json=body, timeout=60)
-            assert response.status_code == 201, response.text
-            yield base, str(response.json()["id"]), "server"
-    else:
-        with ServerThread(stand_in_app()) as base:
-            yield base, "demo", "stand-in"
+    db = tmp_path_factory.mktemp("browser") / "karting.db"
+    with ServerThread(create_app(Settings(database_url=f"sqlite:///{db}", port=0))) as base:
+        body = {
+            "track": "oval",
+            "laps": 3,
+            "seed": 7,
+            "start_lanes": None,
+            "kart_preset": "paper",
+            "karts": [{"controller": "mcts-lqng", "name": "MCTS"}, {"controller": "fixed-lqng", "name": "Fixed"}],
+        }
+        response = httpx.post(f"{base}/api/races", json=body, timeout=60)
+        assert response.status_code == 201, response.text
+        yield base, str(response.json()["id"])
 
 
 # ---------------------------------------------------------------------------------------------- the test
@@ -226,11 +108,17 @@ ANY_WAYPOINT_VISIBLE = """() => {
   return Object.keys(nodes).some(name => /^\\/plans\\/kart\\d+\\/wp\\d+$/.test(name) && nodes[name].visible);
 }"""
 
+CAMERA_NEAR_KART0 = """() => {
+  const m = window.__viserMutable.nodeRefFromName['/karts/kart0'].matrixWorld.elements;  // three.js world frame
+  const c = window.__viserMutable.camera.position;
+  return Math.hypot(c.x - m[12], c.y - m[13], c.z - m[14]) < 25;
+}"""
 
-def test_viewer_in_a_real_browser(live_race: tuple[str, str, str]) -> None:
+
+def test_viewer_in_a_real_browser(live_race: tuple[str, str]) -> None:
     from playwright.sync_api import sync_playwright
 
-    base, race_id, mode = live_race
+    base, race_id = live_race
     ARTIFACTS.mkdir(exist_ok=True)
     outside: list[str] = []
     with sync_playwright() as p:
@@ -266,7 +154,7 @@ def test_viewer_in_a_real_browser(live_race: tuple[str, str, str]) -> None:
             start = [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)]
             deadline = time.monotonic() + 60
             while [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)] == start:
-                assert time.monotonic() < deadline, f"karts never moved ({mode})"
+                assert time.monotonic() < deadline, "karts never moved"
                 page.wait_for_timeout(250)
             before = [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)]
             page.wait_for_timeout(500)
@@ -281,6 +169,16 @@ def test_viewer_in_a_real_browser(live_race: tuple[str, str, str]) -> None:
             # the canvas is nearly transparent until the environment map is ready (slow with software WebGL)
             page.wait_for_function("() => ['', '1'].includes(window.__viserMutable?.canvas?.style.opacity)")
             page.screenshot(path=str(ARTIFACTS / "viewer.png"))
+
+            # a viewer's own "Follow" dropdown: its camera then chases the kart
+            page.get_by_role("combobox", name="Follow").click()
+            page.get_by_role("option", name="1: MCTS").click()
+            page.wait_for_function(CAMERA_NEAR_KART0)
+            cameras = [page.evaluate("() => window.__viserMutable.camera.position.toArray()")]
+            page.wait_for_timeout(500)
+            cameras.append(page.evaluate("() => window.__viserMutable.camera.position.toArray()"))
+            assert math.dist(*cameras) > 0.5, f"the follow camera stands still: {cameras}"
+            page.screenshot(path=str(ARTIFACTS / "viewer-follow.png"))
         finally:
             browser.close()
     assert not outside, f"requests left the machine: {outside[:5]}"
