@@ -131,7 +131,10 @@ def connect(port: int, path: str = "", subprotocol: str = SUBPROTOCOL) -> Any:
 # ---------------------------------------------------------------------------------------------- scene
 def test_viser_wire_decoders_available() -> None:
     assert VISER_SUBPROTOCOL == SUBPROTOCOL
-    assert zstandard.ZstdDecompressor and msgspec.msgpack.decode
+    payload = msgspec.msgpack.encode({"messages": [{"type": "X"}]})
+    frame = len(payload).to_bytes(8, "little")
+    compressed = zstandard.ZstdCompressor().compress(payload)
+    assert decode_frame(frame + len(compressed).to_bytes(8, "little") + compressed) == [{"type": "X"}]
 
 
 def test_scene_has_track_karts_checkpoints_and_plan_nodes(scene: RaceScene) -> None:
@@ -294,7 +297,13 @@ def relay_app() -> Iterator[tuple[ServerThread, RaceScene]]:
     scene = RaceScene(get_track("oval"), [("A", "mcts-lqng"), ("B", "human")], "relay test")
     scenes = {"r1": scene}
 
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        dead_port = int(probe.getsockname()[1])
+
     def scene_port(race_id: str) -> int | None:
+        if race_id == "stale":
+            return dead_port
         s = scenes.get(race_id)
         return None if s is None or s.closed else s.port
 
@@ -401,6 +410,15 @@ def test_relay_passes_version_mismatch_and_scene_close(relay_app: tuple[ServerTh
 
     closed = asyncio.run(scene_closes())
     assert closed.rcvd is not None and closed.rcvd.code in (1000, 1001)
+
+    async def viser_gone() -> ConnectionClosed:  # a port where nothing listens any more
+        async with connect(server.port, "/races/stale/viewer") as ws:
+            with pytest.raises(ConnectionClosed) as closed:
+                await asyncio.wait_for(ws.recv(), 10)
+            return closed.value
+
+    closed = asyncio.run(viser_gone())
+    assert closed.rcvd is not None and closed.rcvd.code == 1011
     deadline = time.monotonic() + 5
     while any(name.startswith("viewer-relay") for name in server.task_names()):
         assert time.monotonic() < deadline, "relay tasks leaked after viser stopped"

@@ -61,11 +61,13 @@ async def relay_viewer(websocket: WebSocket, port: int) -> None:
         )
     except (OSError, InvalidHandshake, TimeoutError) as exc:
         status = exc.response.status_code if isinstance(exc, InvalidStatus) else None
-        log.info("viewer relay: viser on port %d unavailable (%s%s)", port, type(exc).__name__, status or "")
+        log.info("viewer relay: viser on port %d unavailable (%s %s)", port, type(exc).__name__, status or "")
+        # accept first: a close before the handshake reaches the browser as a bare HTTP 403
+        await websocket.accept(subprotocol=protocol)
         await websocket.close(code=CLOSE_UPSTREAM_UNAVAILABLE, reason="race viewer unavailable")
         return
     try:
-        await websocket.accept(subprotocol=upstream.subprotocol or protocol)
+        await websocket.accept(subprotocol=protocol)
         code, reason = await _pump(websocket, upstream)
     finally:
         await upstream.close()
