@@ -185,7 +185,6 @@ class RaceScene:
         self._camera_due = 0.0
         self._viewers: dict[int, _Viewer] = {}
         self._viewers_lock = threading.Lock()
-        self._last_frame: RaceFrame | None = None
 
         # viser prints a banner to stdout on start even when not verbose; keep the server's output clean
         with contextlib.redirect_stdout(io.StringIO()):
@@ -402,7 +401,6 @@ class RaceScene:
 
     # ------------------------------------------------------------------ per-tick work
     def _update(self, frame: RaceFrame) -> None:
-        self._last_frame = frame
         now = time.monotonic()
         karts = frame.karts[: len(self._kart_nodes)]
         plans_changed = frame.plans_version != self._plans_version
