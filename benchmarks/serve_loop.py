@@ -56,7 +56,10 @@ async def read_forever(ws: ClientConnection) -> None:
 
 
 async def wait_running(client: httpx.AsyncClient, race_id: str) -> None:
-    while (await client.get(f"/api/races/{race_id}")).json()["status"] != "running":
+    """Wait until the race runs (raises if it ended instead)."""
+    while (status := (await client.get(f"/api/races/{race_id}")).json()["status"]) != "running":
+        if status not in ("starting", "waiting"):
+            raise RuntimeError(f"race {race_id} is {status}, not running")
         await asyncio.sleep(0.1)
 
 

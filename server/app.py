@@ -91,6 +91,11 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         switch_interval = sys.getswitchinterval()
+        if settings.realtime_priority:
+            if make_realtime(settings.realtime_priority):
+                log.info("the server runs at SCHED_FIFO priority %d", settings.realtime_priority)
+            else:
+                log.warning("real-time priority not allowed here (needs CAP_SYS_NICE); running as usual")
         # the tick task waits at most this long for a controller thread to give up the GIL
         sys.setswitchinterval(settings.switch_interval_s)
         db = await asyncio.to_thread(RaceDatabase, settings.database_url)
@@ -106,11 +111,6 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
             # of the collector's full passes, which would otherwise stall the ticks for tens of milliseconds
             gc.collect()
             gc.freeze()
-            if settings.realtime_priority:
-                if make_realtime(settings.realtime_priority):
-                    log.info("event loop thread runs at SCHED_FIFO priority %d", settings.realtime_priority)
-                else:
-                    log.warning("real-time priority not allowed here (needs CAP_SYS_NICE); running as usual")
             yield
         finally:
             await races.shutdown()

@@ -16,6 +16,7 @@ import time
 
 from controllers.base import Controller, RaceContext
 from controllers.hierarchical import HierarchicalController
+from server.loop import step_below_realtime
 from sim_core.observation import Observation
 from sim_core.params import DT
 
@@ -160,6 +161,7 @@ class DriverThread:
         self.busy_since = None
 
     def _run(self) -> None:
+        step_below_realtime()
         driver = self.driver
         if not driver.disabled:
             self._reset()

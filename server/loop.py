@@ -39,24 +39,37 @@ def new_precise_loop() -> asyncio.AbstractEventLoop:
 
 
 def make_realtime(priority: int) -> bool:
-    """Put the calling thread (the event loop's) in the ``SCHED_FIFO`` real-time class at ``priority``.
+    """Put the calling thread in the ``SCHED_FIFO`` real-time class at ``priority``; threads and processes it
+    creates afterwards inherit it (controller threads step one below with :func:`step_below_realtime`, planner
+    processes return to the ordinary class with :func:`make_ordinary`).
 
     On a busy machine an ordinary thread waits behind other processes for the CPU for tens of milliseconds;
-    a real-time one runs when it wakes. Threads and processes it creates afterwards start as ordinary ones
-    (``SCHED_RESET_ON_FORK``), so controllers and planners never take the CPU from the rest of the system.
+    a real-time one runs when it wakes. The whole process must be real-time, not the event loop's thread alone:
+    a thread that holds the GIL and is descheduled would make the event loop wait as long (priority
+    inversion). Linux keeps 5 % of the CPU for ordinary tasks whatever real-time ones do.
     Needs ``CAP_SYS_NICE`` (or root); returns False, changing nothing, where it is not allowed.
     """
-    policy = getattr(os, "SCHED_FIFO", None)
-    if policy is None or priority <= 0:
+    if not hasattr(os, "SCHED_FIFO") or priority <= 0:
         return False
     try:
-        os.sched_setscheduler(0, policy | getattr(os, "SCHED_RESET_ON_FORK", 0), os.sched_param(priority))
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
     except (PermissionError, OSError):
         return False
     return True
 
 
-def make_ordinary() -> None:
-    """Return the calling thread to the ordinary time-sharing class."""
+def step_below_realtime() -> None:
+    """In a real-time thread, drop one priority level, so the event loop's thread preempts this one."""
     with contextlib.suppress(PermissionError, OSError, AttributeError):
-        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+        if os.sched_getscheduler(0) == os.SCHED_FIFO:
+            priority = os.sched_getparam(0).sched_priority
+            if priority > 1:
+                os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority - 1))
+
+
+def make_ordinary() -> None:
+    """Return the calling thread to the ordinary time-sharing class (planner processes: long searches must
+    never take the CPU from the ticks)."""
+    with contextlib.suppress(PermissionError, OSError, AttributeError):
+        if os.sched_getscheduler(0) != os.SCHED_OTHER:
+            os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))

@@ -24,6 +24,7 @@ from typing import Any
 
 from controllers.base import Controller, HighLevelPlanner, RaceContext
 from controllers.tactical.planner import Plan
+from server.loop import make_ordinary
 from sim_core.observation import Observation
 
 log = logging.getLogger(__name__)
@@ -36,6 +37,10 @@ class PlannerSetup:
 
     factory: Callable[[], Controller]
     context: RaceContext
+
+
+class PlannerUnavailableError(RuntimeError):
+    """The worker holding a planner died or was replaced before answering (the next request rebuilds it)."""
 
 
 class PlannerMissingError(RuntimeError):
@@ -100,9 +105,13 @@ class _Worker:
 
     def __init__(self, slot: int) -> None:
         self.slot = slot
-        self.executor = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+        self.executor = ProcessPoolExecutor(
+            1, mp_context=multiprocessing.get_context("spawn"), initializer=make_ordinary
+        )
         self.opened: set[str] = set()  # keys built in the current process
         self.keys: set[str] = set()  # keys routed here
+        self.in_flight = 0  # calls submitted and not answered
+        self.last_progress = time.monotonic()  # the last answer, or the start of the current busy spell
         self.warm: Future[float] = self.executor.submit(_worker_warm)
 
 
@@ -132,7 +141,8 @@ class PlannerPool:
         return float(seconds)
 
     async def plan(self, key: str, observation: Observation) -> Plan:
-        """A plan for ``key`` from ``observation`` (raises what the planner raised, or ``BrokenProcessPool``)."""
+        """A plan for ``key`` from ``observation`` (raises what the planner raised, or
+        :class:`PlannerUnavailableError`)."""
         worker = self._home[key]
         setup = None if key in worker.opened else self._setups[key]
         plan = await self._call(worker, _worker_plan, key, observation, setup)
@@ -153,20 +163,42 @@ class PlannerPool:
             self._home.pop(key, None)
             self._setups.pop(key, None)
 
-    def restart_worker_of(self, key: str) -> None:
-        """Kill and replace the worker holding ``key`` (its planner hangs); its other planners are rebuilt."""
+    def replace_if_stuck(self, key: str, timeout: float) -> bool:
+        """Kill and replace the worker of ``key`` if it has been busy for ``timeout`` seconds without answering
+        anything (a hung planner; a merely slow one is left alone). Its other planners are rebuilt."""
         worker = self._home.get(key)
-        if worker is not None:
-            self._replace(worker, kill=True)
+        if worker is None or worker.in_flight == 0 or time.monotonic() - worker.last_progress <= timeout:
+            return False
+        self._replace(worker, kill=True)
+        return True
 
     async def _call(self, worker: _Worker, fn: Callable[..., Any], *args: Any) -> Any:
-        loop = asyncio.get_running_loop()
+        if worker.in_flight == 0:
+            worker.last_progress = time.monotonic()
         try:
-            return await loop.run_in_executor(worker.executor, fn, *args)
-        except BrokenProcessPool:
-            if self._workers[worker.slot] is worker:
-                self._replace(worker, kill=False)
+            future = worker.executor.submit(fn, *args)
+        except (BrokenProcessPool, RuntimeError) as exc:  # died, or shut down by a replacement
+            self._replace_if_current(worker)
+            raise PlannerUnavailableError(str(exc)) from None
+        worker.in_flight += 1
+        try:
+            return await asyncio.wrap_future(future)
+        except BrokenProcessPool as exc:
+            self._replace_if_current(worker)
+            raise PlannerUnavailableError(str(exc)) from None
+        except asyncio.CancelledError:
+            task = asyncio.current_task()
+            if future.cancelled() and (task is None or not task.cancelling()):
+                # the call was dropped with its worker, not the caller cancelled
+                raise PlannerUnavailableError("the planner worker was replaced") from None
             raise
+        finally:
+            worker.in_flight -= 1
+            worker.last_progress = time.monotonic()
+
+    def _replace_if_current(self, worker: _Worker) -> None:
+        if self._workers[worker.slot] is worker:
+            self._replace(worker, kill=False)
 
     def _replace(self, worker: _Worker, *, kill: bool) -> None:
         fresh = _Worker(worker.slot)

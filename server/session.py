@@ -417,7 +417,7 @@ class RaceSession:
                     del self._plan_tasks[d.index]
                     d.planner_faults += 1
                     d.last_error = f"no plan within {self.settings.plan_timeout_s:g} s"
-                    self._pool.restart_worker_of(self._plan_key(d))
+                    self._pool.replace_if_stuck(self._plan_key(d), self.settings.plan_timeout_s)
                 continue
             observation = observations[d.index]
             if observation.me.finished or not controller.wants_plan(observation.time):

@@ -28,7 +28,7 @@ class Settings(BaseSettings):
     telemetry_hz: float = Field(25.0, gt=0.0, le=50.0, description="[Hz] telemetry messages per second")
     keep_finished_s: float = Field(60.0, ge=0.0, description="[s] a finished race stays live (scene, sockets)")
     realtime_priority: int = Field(
-        0, ge=0, le=99, description="SCHED_FIFO priority of the event loop thread (0: ordinary; needs CAP_SYS_NICE)"
+        0, ge=0, le=99, description="SCHED_FIFO priority of the server's threads (0: ordinary; needs CAP_SYS_NICE)"
     )
     switch_interval_s: float = Field(
         0.0005, gt=0.0, description="[s] sys.setswitchinterval: how long a busy thread may keep the GIL"

@@ -38,7 +38,7 @@ class Raiser:
 
 
 class Hanger(Raiser):
-    """Drives for 20 decisions, then never returns."""
+    """Answers 20 decisions, then never returns."""
 
     name = "hanger"
 
@@ -46,11 +46,11 @@ class Hanger(Raiser):
         self.calls = 0
 
     def act(self, observation: Observation) -> Action:
-        """Full throttle, then a hang."""
+        """Stands still, then hangs."""
         self.calls += 1
         if self.calls > 20:
             RELEASE.wait(60)
-        return Action(0.0, 1.0)
+        return Action(0.0, 0.0)
 
 
 class Sluggard(Raiser):
@@ -59,9 +59,9 @@ class Sluggard(Raiser):
     name = "sluggard"
 
     def act(self, observation: Observation) -> Action:
-        """Full throttle, late."""
+        """Stands still, late."""
         time.sleep(0.05)
-        return Action(0.0, 1.0)
+        return Action(0.0, 0.0)
 
 
 class BadReset(Raiser):
@@ -94,30 +94,27 @@ def client(live: LiveServer) -> Iterator[httpx.Client]:
         yield c
 
 
-def race_against_lane_follower(client: httpx.Client, controller: str) -> dict[str, Any]:
-    """A running race: ``controller`` (kart 0) against the lane follower (kart 1)."""
-    race = start_race(client, track="oval", laps=3, karts=[{"controller": controller}, {"controller": "lane-follower"}])
-    return wait_status(client, race["id"], ("running",), 30)
+@pytest.fixture(scope="module")
+def faulty_race(client: httpx.Client) -> Iterator[dict[str, Any]]:
+    """One race: the lane follower (kart 0) against the raiser, the hanger, the sluggard and the bad reset
+    (karts 1-4), followed until the hanger was given up and the lane follower passed three checkpoints."""
+    karts = [{"controller": name} for name in ("lane-follower", "raiser", "hanger", "sluggard", "bad-reset")]
+    race = start_race(client, track="oval", laps=3, karts=karts)
+    wait_status(client, race["id"], ("running",), 30)
 
+    def follower_on_and_hanger_given_up() -> dict[str, Any] | None:
+        detail: dict[str, Any] = client.get(f"/api/races/{race['id']}").json()
+        passed = {s["index"]: s["checkpoints_passed"] for s in detail["standings"]}[0]
+        return detail if passed >= 3 and detail["drivers"][2]["hangs"] else None
 
-def standings_when_kart_1_passed(client: httpx.Client, race_id: str, checkpoints: int) -> dict[int, Any]:
-    """The standings (by kart) once kart 1 has passed ``checkpoints`` checkpoints."""
-
-    def passed() -> dict[int, Any] | None:
-        standings = {s["index"]: s for s in client.get(f"/api/races/{race_id}").json()["standings"]}
-        return standings if standings[1]["checkpoints_passed"] >= checkpoints else None
-
-    result: dict[int, Any] = wait_for(passed, 10, 0.1)
-    return result
-
-
-def ticks_per_second(client: httpx.Client, race_id: str, seconds: float = 1.0) -> float:
-    """Ticks the race ran per wall-clock second over ``seconds``."""
-    first = client.get(f"/api/races/{race_id}").json()["tick_stats"]["ticks"]
+    wait_for(follower_on_and_hanger_given_up, 15, 0.1)
+    ticks = client.get(f"/api/races/{race['id']}").json()["tick_stats"]["ticks"]
     start = time.monotonic()
-    time.sleep(seconds)
-    last = client.get(f"/api/races/{race_id}").json()["tick_stats"]["ticks"]
-    return (last - first) / (time.monotonic() - start)
+    time.sleep(1.0)
+    detail = client.get(f"/api/races/{race['id']}").json()
+    rate = (detail["tick_stats"]["ticks"] - ticks) / (time.monotonic() - start)
+    yield {"race": race, "detail": detail, "ticks_per_second": rate}
+    client.post(f"/api/races/{race['id']}/stop")
 
 
 def test_faulty_controllers_are_not_public(client: httpx.Client) -> None:
@@ -126,51 +123,49 @@ def test_faulty_controllers_are_not_public(client: httpx.Client) -> None:
     assert not set(FAULTY) & set(REGISTRY)  # ...the registry was not
 
 
-def test_a_raising_controller_brakes_its_kart_and_is_counted(client: httpx.Client) -> None:
-    race = race_against_lane_follower(client, "raiser")
-    assert 40 <= ticks_per_second(client, race["id"]) <= 60
-    detail = client.get(f"/api/races/{race['id']}").json()
-    raiser, follower = detail["drivers"]
+def test_the_tick_keeps_its_rate_whatever_the_controllers_do(faulty_race: dict[str, Any]) -> None:
+    assert 40 <= faulty_race["ticks_per_second"] <= 60
+    assert faulty_race["detail"]["tick_stats"]["overruns"] <= 5
+
+
+def test_the_healthy_kart_drives_on(faulty_race: dict[str, Any]) -> None:
+    detail = faulty_race["detail"]
+    follower = detail["drivers"][0]
+    assert follower["exceptions"] == 0 and follower["controller_faults"] <= 5 and not follower["braking"]
+    passed = {s["index"]: s["checkpoints_passed"] for s in detail["standings"]}
+    assert passed[0] >= 3 and all(passed[k] <= 0 for k in (1, 2, 3, 4))
+
+
+def test_a_raising_controller_brakes_its_kart_and_is_counted(faulty_race: dict[str, Any]) -> None:
+    raiser = faulty_race["detail"]["drivers"][1]
     assert raiser["exceptions"] > 20 and raiser["controller_faults"] >= raiser["exceptions"]
     assert "ZeroDivisionError: raiser always fails" in raiser["last_error"]
     assert raiser["braking"] and not raiser["disabled"]
-    assert follower["controller_faults"] <= 5 and follower["exceptions"] == 0
-    assert {s["index"]: s for s in detail["standings"]}[0]["controller_faults"] > 20  # shown in the standings too
-    assert standings_when_kart_1_passed(client, race["id"], 3)[0]["checkpoints_passed"] == 0
-    client.post(f"/api/races/{race['id']}/stop")
-    result = client.get(f"/api/races/{race['id']}/result").json()
-    assert result["karts"][0]["controller_faults"] > 20
+    standings = {s["index"]: s for s in faulty_race["detail"]["standings"]}
+    assert standings[1]["controller_faults"] > 20  # shown in the standings (and every frame)
 
 
-def test_a_hanging_controller_is_given_up_and_the_others_drive_on(client: httpx.Client) -> None:
-    race = race_against_lane_follower(client, "hanger")
-
-    def hung() -> dict[str, Any] | None:
-        detail: dict[str, Any] = client.get(f"/api/races/{race['id']}").json()
-        return detail if detail["drivers"][0]["hangs"] else None
-
-    detail = wait_for(hung, 5)
-    hanger = detail["drivers"][0]
-    assert hanger["disabled"] and hanger["hangs"] == 1 and "did not return" in hanger["last_error"]
-    assert 40 <= ticks_per_second(client, race["id"]) <= 60
-    assert standings_when_kart_1_passed(client, race["id"], 3)[1]["controller_faults"] <= 5
-    assert client.get(f"/api/races/{race['id']}").json()["drivers"][0]["braking"]
-    client.post(f"/api/races/{race['id']}/stop")
+def test_a_hanging_controller_is_given_up(faulty_race: dict[str, Any]) -> None:
+    hanger = faulty_race["detail"]["drivers"][2]
+    assert hanger["disabled"] and hanger["hangs"] == 1 and hanger["braking"]
+    assert f"act did not return within {HANG_S:g} s" in hanger["last_error"]
 
 
-def test_a_slow_controller_misses_deadlines_but_never_delays_the_tick(client: httpx.Client) -> None:
-    race = race_against_lane_follower(client, "sluggard")
-    assert 40 <= ticks_per_second(client, race["id"]) <= 60
-    detail = client.get(f"/api/races/{race['id']}").json()
-    sluggard = detail["drivers"][0]
-    assert sluggard["missed_deadlines"] > 20 and sluggard["hangs"] == 0
-    assert detail["tick_stats"]["overruns"] <= 2
-    client.post(f"/api/races/{race['id']}/stop")
+def test_a_slow_controller_misses_deadlines(faulty_race: dict[str, Any]) -> None:
+    sluggard = faulty_race["detail"]["drivers"][3]
+    assert sluggard["missed_deadlines"] > 20 and sluggard["hangs"] == 0 and not sluggard["disabled"]
 
 
-def test_a_controller_whose_reset_fails_brakes_from_the_start(client: httpx.Client) -> None:
-    race = race_against_lane_follower(client, "bad-reset")
-    bad = client.get(f"/api/races/{race['id']}").json()["drivers"][0]
-    assert bad["disabled"] and bad["exceptions"] == 1 and "no track for me" in bad["last_error"]
-    assert standings_when_kart_1_passed(client, race["id"], 3)[0]["checkpoints_passed"] == 0
-    client.post(f"/api/races/{race['id']}/stop")
+def test_a_controller_whose_reset_fails_brakes_from_the_start(faulty_race: dict[str, Any]) -> None:
+    bad = faulty_race["detail"]["drivers"][4]
+    assert (
+        bad["disabled"] and bad["exceptions"] == 1 and "reset raised RuntimeError: no track for me" in bad["last_error"]
+    )
+
+
+def test_faults_are_in_the_result(client: httpx.Client, faulty_race: dict[str, Any]) -> None:
+    race_id = faulty_race["race"]["id"]
+    client.post(f"/api/races/{race_id}/stop")
+    karts = client.get(f"/api/races/{race_id}/result").json()["karts"]
+    assert karts[1]["controller_faults"] > 20 and "ZeroDivisionError" in karts[1]["last_error"]
+    assert karts[2]["controller_faults"] >= 1 and karts[4]["controller_faults"] == 1
