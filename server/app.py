@@ -18,6 +18,7 @@ from controllers.registry import REGISTRY, ControllerSpec
 from server import api, ws
 from server.db import RaceDatabase
 from server.drivers import HUMAN, KartDriver
+from server.hosts import ControllerHosts
 from server.live import LiveRaces
 from server.loop import make_ordinary, make_realtime
 from server.planning import PlannerPool
@@ -57,7 +58,8 @@ def _web_router(races: Callable[[], LiveRaces]) -> APIRouter | None:
 
 
 def warm_tick_path(catalogue: Mapping[str, ControllerSpec]) -> None:
-    """Load the compiled kernels the tick uses (world step, sensors, trackers) before the first race."""
+    """Load the compiled kernels the tick uses (world step, sensors, and the trackers of ``catalogue`` when they
+    run in this process) before the first race."""
     from controllers.base import RaceContext
     from sim_core.observation import observe
     from sim_core.params import SimParams
@@ -103,10 +105,13 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
         if aborted:
             log.warning("%d race(s) left running by a previous server marked aborted", aborted)
         pool = PlannerPool(settings.plan_workers)
-        races = LiveRaces(settings, catalogue, pool, db, scene_factory)
+        hosts = ControllerHosts(settings.controller_hosts) if settings.controller_hosts else None
+        races = LiveRaces(settings, catalogue, pool, hosts, db, scene_factory)
         app.state.races = races
         try:
-            await asyncio.gather(pool.wait_warm(), asyncio.to_thread(warm_tick_path, catalogue))
+            await asyncio.gather(
+                pool.wait_warm(), asyncio.to_thread(warm_tick_path, catalogue if hosts is None else {})
+            )
             # what start-up built (modules, compiled kernels, tables) lives as long as the process: keep it out
             # of the collector's full passes, which would otherwise stall the ticks for tens of milliseconds
             gc.collect()
@@ -115,6 +120,8 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
         finally:
             await races.shutdown()
             await asyncio.to_thread(pool.shutdown)
+            if hosts is not None:
+                await asyncio.to_thread(hosts.close)
             db.close()
             sys.setswitchinterval(switch_interval)
             make_ordinary()

@@ -13,9 +13,12 @@ import logging
 import math
 import threading
 import time
+from collections.abc import Callable
+from typing import Any, Protocol
 
 from controllers.base import Controller, RaceContext
 from controllers.hierarchical import HierarchicalController
+from controllers.tactical.planner import Plan
 from server.loop import step_below_realtime
 from sim_core.observation import Observation
 from sim_core.params import DT
@@ -106,11 +109,33 @@ class KartDriver:
             raise ValueError(f"non-finite action ({steer}, {throttle})")
         return steer, throttle
 
-    def record_error(self, what: str) -> None:
-        """Remember the latest fault's description (the first one is also logged with its traceback)."""
+    def record_error(self, what: str, *, traceback: bool = True) -> None:
+        """Remember the latest fault's description (the first one is also logged, with the traceback of the
+        exception being handled when ``traceback``)."""
         if self.last_error is None:
-            log.warning("kart %d (%s): %s", self.index, self.controller_name, what, exc_info=True)
+            log.warning("kart %d (%s): %s", self.index, self.controller_name, what, exc_info=traceback)
         self.last_error = what
+
+
+class KartWorker(Protocol):
+    """Where an AI kart's controller runs: a :class:`DriverThread`, or a kart in a controller host process
+    (:class:`server.hosts.HostedKart`)."""
+
+    resetting: bool  # the controller is being built and reset
+    latest: tuple[int, float, float] | None  # the newest answer: (observation step, steer, throttle)
+
+    @property
+    def busy_since(self) -> float | None:
+        """``time.monotonic()`` when the call running now started (None when idle)."""
+
+    def submit(self, step: int, observation: Observation) -> None:
+        """Hand over the kart's observation of race step ``step`` (newest wins, never blocks)."""
+
+    def deliver(self, plan: Plan) -> None:
+        """Make ``plan`` the active plan of the controller copy that runs there."""
+
+    def retire(self) -> None:
+        """Stop using it (a call still running is abandoned)."""
 
 
 class DriverThread:
@@ -120,12 +145,20 @@ class DriverThread:
     :meth:`submit` never blocks (the newest observation replaces one not yet taken); the answer lands in
     :attr:`latest` as ``(observation step, steer, throttle)``. :attr:`busy_since` tells since when a call has
     been running, so the tick task can declare it hung and :meth:`retire` the thread. One thread per kart: a
-    controller that hangs delays no other kart.
+    controller that hangs delays no other kart. ``report`` (in controller hosts) also gets every outcome:
+    ``("ready",)``, ``("failed", what)`` (reset), ``("action", step, steer, throttle)``, ``("error", what)``.
     """
 
-    def __init__(self, driver: KartDriver, context: RaceContext, name: str) -> None:
+    def __init__(
+        self,
+        driver: KartDriver,
+        context: RaceContext,
+        name: str,
+        report: Callable[[tuple[Any, ...]], None] | None = None,
+    ) -> None:
         self.driver = driver
         self._context = context
+        self._report = report or (lambda event: None)
         self._job: tuple[int, Observation] | None = None
         self._lock = threading.Lock()
         self._wake = threading.Event()
@@ -147,6 +180,9 @@ class DriverThread:
         self.retired = True
         self._wake.set()
 
+    def deliver(self, plan: Plan) -> None:
+        """Nothing to do: the thread runs the session's own controller object, which already has the plan."""
+
     def _reset(self) -> None:
         driver = self.driver
         self.busy_since = time.monotonic()
@@ -156,8 +192,10 @@ class DriverThread:
             driver.exceptions += 1
             driver.disabled = True
             driver.record_error(f"reset raised {type(exc).__name__}: {exc}")
+            self._report(("failed", driver.last_error))
         else:
             driver.ready = not self.retired
+            self._report(("ready",))
         self.busy_since = None
 
     def _run(self) -> None:
@@ -180,9 +218,12 @@ class DriverThread:
                 steer, throttle = driver.compute(observation)
             except Exception as exc:
                 driver.exceptions += 1
-                driver.record_error(f"act raised {type(exc).__name__}: {exc}")
+                what = f"act raised {type(exc).__name__}: {exc}"
+                driver.record_error(what)
+                self._report(("error", what))
             else:
                 result = (step, steer, throttle)
             self.busy_since = None
             if result is not None and not self.retired:  # a hung call that came back is not used
                 self.latest = result
+                self._report(("action", *result))

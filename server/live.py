@@ -10,6 +10,7 @@ from collections.abc import Mapping
 from controllers.registry import ControllerSpec
 from server.db import RaceDatabase, StoredRace
 from server.drivers import HUMAN
+from server.hosts import ControllerHosts
 from server.planning import PlannerPool
 from server.session import RaceConfig, RaceSession, SceneFactory
 from server.settings import Settings
@@ -31,10 +32,12 @@ class LiveRaces:
         settings: Settings,
         catalogue: Mapping[str, ControllerSpec],
         pool: PlannerPool,
+        hosts: ControllerHosts | None,
         db: RaceDatabase,
         scene_factory: SceneFactory | None,
     ) -> None:
         self.settings = settings
+        self.hosts = hosts
         self.catalogue = catalogue
         self.pool = pool
         self.db = db
@@ -68,6 +71,7 @@ class LiveRaces:
             settings=self.settings,
             catalogue=self.catalogue,
             pool=self.pool,
+            hosts=self.hosts,
             db=self.db,
             scene_factory=self.scene_factory,
         )

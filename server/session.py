@@ -31,7 +31,8 @@ from controllers.race import Replay
 from controllers.registry import ControllerSpec
 from controllers.tactical.planner import Plan
 from server.db import RaceDatabase, utc_now
-from server.drivers import HUMAN, DriverThread, KartDriver, brake_throttle
+from server.drivers import HUMAN, DriverThread, KartDriver, KartWorker, brake_throttle
+from server.hosts import ControllerHosts
 from server.planning import PlannerPool, PlannerSetup
 from server.settings import Settings
 from server.ticks import TickSchedule, sleep_until, spread_start
@@ -122,6 +123,7 @@ class RaceSession:
         settings: Settings,
         catalogue: Mapping[str, ControllerSpec],
         pool: PlannerPool,
+        hosts: ControllerHosts | None,
         db: RaceDatabase,
         scene_factory: SceneFactory | None,
     ) -> None:
@@ -132,6 +134,7 @@ class RaceSession:
         self.status = "starting"
         self._catalogue = catalogue
         self._pool = pool
+        self._hosts = hosts
         self._db = db
         self._scene_factory = scene_factory
         self.drivers = [self._make_driver(k, entry, tokens.get(k)) for k, entry in enumerate(config.karts)]
@@ -146,7 +149,7 @@ class RaceSession:
         self._plans: list[dict[str, Any]] = []  # plans as they were applied (the replay's)
         self.plans_version = 0
         self.error: str | None = None
-        self._threads: dict[int, DriverThread] = {}  # AI kart -> its controller's thread
+        self._workers: dict[int, KartWorker] = {}  # AI kart -> where its controller runs
         self._actions = np.zeros((1, len(self.drivers), 2))
         self._plan_tasks: dict[int, tuple[asyncio.Task[Plan], float]] = {}  # kart -> (request, wall time sent)
         self._stop_status: str | None = None
@@ -266,10 +269,15 @@ class RaceSession:
             if not d.human
         }
         ai = [d for d in self.drivers if not d.human and not d.disabled]
-        self._threads = {d.index: DriverThread(d, contexts[d.index], f"race-{self.id}-kart{d.index}") for d in ai}
+        for d in ai:
+            if self._hosts is not None:
+                factory = self._catalogue[d.controller_name].factory
+                self._workers[d.index] = self._hosts.attach(d, factory, contexts[d.index])
+            else:
+                self._workers[d.index] = DriverThread(d, contexts[d.index], f"race-{self.id}-kart{d.index}")
         opening = [self._open_planner(d, contexts[d.index]) for d in ai if d.hierarchical]
         await asyncio.gather(self._open_scene(), *opening)
-        while any(t.resetting for t in self._threads.values()) and self._stop_status is None:
+        while any(w.resetting for w in self._workers.values()) and self._stop_status is None:
             self._check_hang()
             await asyncio.sleep(HANG_POLL_S)
         self._publish()
@@ -363,8 +371,8 @@ class RaceSession:
         d.braking = False
 
     def _ai_input(self, d: KartDriver, step: int, speed: float) -> None:
-        thread = self._threads.get(d.index)
-        out = thread.latest if thread is not None else None
+        worker = self._workers.get(d.index)
+        out = worker.latest if worker is not None else None
         if out is not None and out[0] > d.fresh_step:
             d.fresh_step, d.steer, d.throttle = out
         if d.submitted_step > d.fresh_step:
@@ -379,26 +387,28 @@ class RaceSession:
     def _submit(self, observations: Sequence[Observation]) -> None:
         assert self.world is not None
         step = int(self.world.steps[0])
-        for k, thread in self._threads.items():
+        for k, worker in self._workers.items():
             d = self.drivers[k]
             if d.ready and not d.disabled and step % d.every == 0 and not observations[k].me.finished:
                 d.submitted_step = step
-                thread.submit(step, observations[k])
+                worker.submit(step, observations[k])
 
     def _check_hang(self) -> None:
+        if self._hosts is not None:
+            self._hosts.revive()
         now = time.monotonic()
-        for k, thread in list(self._threads.items()):
-            since = thread.busy_since
-            limit = self.settings.controller_reset_s if thread.resetting else self.settings.controller_hang_s
+        for k, worker in list(self._workers.items()):
+            since = worker.busy_since
+            limit = self.settings.controller_reset_s if worker.resetting else self.settings.controller_hang_s
             if since is None or now - since <= limit:
                 continue
             d = self.drivers[k]
             d.hangs += 1
             d.disabled = True
-            d.last_error = f"{'reset' if thread.resetting else 'act'} did not return within {limit:g} s"
+            d.last_error = f"{'reset' if worker.resetting else 'act'} did not return within {limit:g} s"
             log.warning("race %s kart %d (%s): %s; the kart brakes", self.id, k, d.controller_name, d.last_error)
-            thread.retire()
-            del self._threads[k]
+            worker.retire()
+            del self._workers[k]
 
     # ------------------------------------------------------------------ plans
     def _plan_key(self, d: KartDriver) -> str:
@@ -444,6 +454,9 @@ class RaceSession:
     def _deliver(self, d: KartDriver, plan: Plan) -> None:
         assert isinstance(d.controller, HierarchicalController) and self.world is not None
         d.controller.deliver(plan)
+        worker = self._workers.get(d.index)
+        if worker is not None:
+            worker.deliver(plan)
         for waypoint in plan.ego_waypoints:  # the referee's delta_r / delta_v targets, as in headless races
             self.world.set_target(0, d.index, waypoint.checkpoint, waypoint.lane, waypoint.speed)
         d.waypoints = tuple(w.position for w in plan.ego_waypoints)
@@ -588,9 +601,9 @@ class RaceSession:
         self._db.finish(self.id, result["status"], result["duration"], result, tick_stats or {}, self.replay_dict())
 
     def _release(self) -> None:
-        for thread in self._threads.values():
-            thread.retire()
-        self._threads.clear()
+        for worker in self._workers.values():
+            worker.retire()
+        self._workers.clear()
         for task, _sent in self._plan_tasks.values():
             task.cancel()
         self._plan_tasks.clear()

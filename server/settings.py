@@ -18,6 +18,9 @@ class Settings(BaseSettings):
     max_laps: int = Field(20, ge=1)
     viewer_enabled: bool = True  # one 3D scene (viser) per race, served under /races/{id}/viewer/
     plan_workers: int = Field(1, ge=1, description="planner worker processes shared by every race")
+    controller_hosts: int = Field(
+        1, ge=0, description="processes running the AI controllers (0: a thread per AI kart in the server process)"
+    )
     speedup: float = Field(1.0, gt=0.0, le=100.0, description="tick rate multiple of 50 Hz (tests); 1 = real time")
     drive_timeout_s: float = Field(0.5, gt=0.0, description="[s] wall time without driver input before braking")
     human_wait_s: float = Field(120.0, ge=0.0, description="[s] a race waits this long for its human drivers")

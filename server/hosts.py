@@ -1,0 +1,316 @@
+"""AI controllers in worker processes ("controller hosts"), so their Python work does not hold the server's GIL.
+
+Trackers running in threads of the server process take its GIL for about half a millisecond per kart and tick;
+with many races the event loop then waits for the GIL before its ticks. A host is one spawned process that
+runs the controllers of many karts (from any races), each in its own :class:`~server.drivers.DriverThread`
+there, so a slow or hung controller delays no other kart. Per kart, the server sends the newest observation
+(newest wins: nothing queues behind a slow controller) and gets back ``(step, steer, throttle)``; plans from
+the planner workers are forwarded to the host's copy of the controller. One thread per host in the server
+process does all the talking, so the tick task never blocks on a pipe.
+
+A kart whose answer is overdue is hung: the tick task retires it (its thread in the host is abandoned). A host
+that dies is restarted and its karts are built and reset again.
+
+:class:`HostedKart` is the tick task's handle on such a kart (the :class:`~server.drivers.KartWorker` interface).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import multiprocessing
+import os
+import threading
+import time
+from collections.abc import Callable
+from multiprocessing.connection import Connection, wait
+from typing import Any
+
+from controllers.base import Controller, RaceContext
+from controllers.hierarchical import HierarchicalController
+from controllers.tactical.planner import Plan
+from server.drivers import DriverThread, KartDriver
+from server.loop import step_below_realtime
+from sim_core.observation import Observation
+
+log = logging.getLogger(__name__)
+
+
+# ----------------------------------------------------------------------------------------- host process side
+def _host_main(conn: Connection) -> None:
+    """The host process: one driver thread per kart; messages in, outcomes out, until told to stop."""
+    send_lock = threading.Lock()
+    threads: dict[int, DriverThread] = {}
+
+    def reporter(kart: int) -> Callable[[tuple[Any, ...]], None]:
+        def report(event: tuple[Any, ...]) -> None:
+            with send_lock, contextlib.suppress(OSError, ValueError):
+                conn.send((event[0], kart, *event[1:]))
+
+        return report
+
+    while True:
+        try:
+            message = conn.recv()
+        except (EOFError, OSError):
+            return  # the server went away
+        kind, kart = message[0], message[1]
+        if kind == "open":
+            _, _, name, factory, context = message
+            try:
+                controller = factory()
+            except Exception as exc:
+                reporter(kart)(("failed", f"construction raised {type(exc).__name__}: {exc}"))
+                continue
+            driver = KartDriver(context.ego, name, name, controller, None)
+            threads[kart] = DriverThread(driver, context, f"kart-{kart}", reporter(kart))
+        elif kind == "act" and kart in threads:
+            threads[kart].submit(*message[2])
+        elif kind == "plan" and kart in threads:
+            controller = threads[kart].driver.controller
+            if isinstance(controller, HierarchicalController):
+                controller.deliver(message[2])
+        elif kind == "close" and kart in threads:
+            threads.pop(kart).retire()
+        elif kind == "stop":
+            return
+
+
+def _host_warm() -> None:
+    """Load the compiled kernels the registered controllers use, before the first race."""
+    from controllers.registry import REGISTRY
+    from sim_core.observation import observe
+    from sim_core.params import SimParams
+    from sim_core.track_io import get_track
+    from sim_core.world import World
+
+    track = get_track("oval")
+    params = SimParams()
+    world = World(track, 1, 2, params, laps=1)
+    observation = observe(world, 0)[0]
+    for spec in REGISTRY.values():
+        driver = KartDriver(0, spec.name, spec.name, spec.factory(), None)
+        with contextlib.suppress(Exception):
+            driver.reset(RaceContext(track, params.kart, 0, 2, world.lane_change_limit, 0))
+            driver.compute(observation)
+
+
+def _host_entry(conn: Connection) -> None:
+    step_below_realtime()
+    _host_warm()
+    _host_main(conn)
+
+
+# ----------------------------------------------------------------------------------------- server side
+class HostedKart:
+    """The tick task's handle on one kart whose controller runs in a host."""
+
+    def __init__(
+        self,
+        host: ControllerHost,
+        kart_id: int,
+        driver: KartDriver,
+        factory: Callable[[], Controller],
+        context: RaceContext,
+    ) -> None:
+        self.host = host
+        self.kart_id = kart_id
+        self.driver = driver
+        self.factory = factory
+        self.context = context
+        self.resetting = True
+        self.latest: tuple[int, float, float] | None = None
+        self.waiting_since: float | None = time.monotonic()  # the oldest unanswered request (or the reset)
+
+    @property
+    def busy_since(self) -> float | None:
+        """Since when an answer (or the end of the reset) has been awaited; None when nothing is owed."""
+        return self.waiting_since
+
+    def submit(self, step: int, observation: Observation) -> None:
+        """Hand over the kart's observation of race step ``step`` (newest wins)."""
+        if self.waiting_since is None:
+            self.waiting_since = time.monotonic()
+        self.host.send_act(self.kart_id, (step, observation))
+
+    def deliver(self, plan: Plan) -> None:
+        """Forward a plan to the host's copy of the controller."""
+        self.host.send(("plan", self.kart_id, plan))
+
+    def retire(self) -> None:
+        """Stop using this kart's controller (its thread in the host is abandoned)."""
+        self.host.detach(self.kart_id)
+
+    def reopen(self) -> None:
+        """Build and reset the controller (again) in the host."""
+        self.resetting = True
+        self.waiting_since = time.monotonic()
+        self.host.send(("open", self.kart_id, self.driver.controller_name, self.factory, self.context))
+
+    def outcome(self, kind: str, args: tuple[Any, ...]) -> None:
+        """An event from the host (on the host's pump thread)."""
+        driver = self.driver
+        if kind == "action":
+            self.latest = (args[0], args[1], args[2])
+            self.waiting_since = None
+        elif kind == "ready":
+            driver.ready = True
+            self.resetting = False
+            self.waiting_since = None
+        elif kind == "failed":
+            driver.exceptions += 1
+            driver.disabled = True
+            driver.record_error(args[0], traceback=False)
+            self.resetting = False
+            self.waiting_since = None
+        elif kind == "error":
+            driver.exceptions += 1
+            driver.record_error(args[0], traceback=False)
+            self.waiting_since = None
+
+
+class ControllerHost:
+    """One host process and the server-side thread that feeds it and reads its answers."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self._karts: dict[int, HostedKart] = {}
+        self._lock = threading.Lock()
+        self._control: list[tuple[Any, ...]] = []
+        self._acts: dict[int, tuple[int, Observation]] = {}
+        self.restarts = 0
+        self._start()
+
+    def _start(self) -> None:
+        self.died = False  # the process ended without being asked to
+        self._stopping = False
+        self._signalled = False
+        context = multiprocessing.get_context("spawn")
+        self._conn, child = context.Pipe()
+        self.process = context.Process(target=_host_entry, args=(child,), name=self.name, daemon=True)
+        self.process.start()
+        child.close()
+        self._wake_read, self._wake_write = os.pipe()
+        args = (self._conn, self._wake_read)
+        self._thread = threading.Thread(target=self._pump, args=args, name=f"{self.name}-pump", daemon=True)
+        self._thread.start()
+
+    @property
+    def load(self) -> int:
+        """Karts attached."""
+        return len(self._karts)
+
+    def attach(
+        self, kart_id: int, driver: KartDriver, factory: Callable[[], Controller], context: RaceContext
+    ) -> HostedKart:
+        """Build and reset a kart's controller in the host (outcomes arrive on the handle)."""
+        kart = HostedKart(self, kart_id, driver, factory, context)
+        self._karts[kart_id] = kart
+        kart.reopen()
+        return kart
+
+    def detach(self, kart_id: int) -> None:
+        """Forget a kart."""
+        if self._karts.pop(kart_id, None) is not None:
+            self.send(("close", kart_id))
+
+    def send(self, message: tuple[Any, ...]) -> None:
+        """Queue a control message (sent in order, before pending observations)."""
+        with self._lock:
+            self._control.append(message)
+        self._wake()
+
+    def send_act(self, kart_id: int, job: tuple[int, Observation]) -> None:
+        """Queue a kart's newest observation (replacing one not yet sent)."""
+        with self._lock:
+            self._acts[kart_id] = job
+        self._wake()
+
+    def _wake(self) -> None:
+        if not self._signalled:  # one wake-up byte per batch: a syscall per kart and tick would add up
+            self._signalled = True
+            with contextlib.suppress(OSError):
+                os.write(self._wake_write, b"x")
+
+    def restart(self) -> None:
+        """Start a fresh process (the old one died); every attached kart is built and reset again."""
+        self.restarts += 1
+        log.warning("controller host %s died; restarting it", self.name)
+        self._stop_process(kill=True)
+        with self._lock:
+            self._control.clear()
+            self._acts.clear()
+        self._start()
+        for kart in self._karts.values():
+            kart.reopen()
+
+    def _stop_process(self, *, kill: bool) -> None:
+        self._stopping = True
+        if kill:
+            self.process.kill()
+        else:
+            with contextlib.suppress(OSError, ValueError):
+                self._conn.send(("stop", -1))
+        self.process.join(5)
+        if self.process.is_alive():
+            self.process.kill()
+            self.process.join(5)
+        for fd in (self._wake_read, self._wake_write):
+            with contextlib.suppress(OSError):
+                os.close(fd)
+        with contextlib.suppress(OSError):
+            self._conn.close()
+
+    def close(self) -> None:
+        """Stop the host (blocking: call it through ``asyncio.to_thread``)."""
+        self._karts.clear()
+        self._stop_process(kill=False)
+
+    def _pump(self, conn: Connection, wake: int) -> None:
+        try:
+            while True:
+                ready = wait([conn, wake])
+                if wake in ready:
+                    os.read(wake, 4096)
+                    self._signalled = False
+                    with self._lock:
+                        control, self._control = self._control, []
+                        acts, self._acts = self._acts, {}
+                    for message in control:
+                        conn.send(message)
+                    for kart_id, job in acts.items():
+                        conn.send(("act", kart_id, job))
+                if conn in ready:
+                    while conn.poll():
+                        kind, kart_id, *args = conn.recv()
+                        kart = self._karts.get(kart_id)
+                        if kart is not None:
+                            kart.outcome(kind, tuple(args))
+        except (EOFError, OSError, ValueError):
+            if not self._stopping:
+                self.died = True
+
+
+class ControllerHosts:
+    """``n`` hosts; a kart goes to the least-loaded one."""
+
+    def __init__(self, n: int) -> None:
+        self.hosts = [ControllerHost(f"controller-host-{i}") for i in range(n)]
+        self._next_id = 0
+
+    def attach(self, driver: KartDriver, factory: Callable[[], Controller], context: RaceContext) -> HostedKart:
+        """Run ``driver``'s controller (built by ``factory``) in a host."""
+        self._next_id += 1
+        host = min(self.hosts, key=lambda h: h.load)
+        return host.attach(self._next_id, driver, factory, context)
+
+    def revive(self) -> None:
+        """Restart hosts that died."""
+        for host in self.hosts:
+            if host.died:
+                host.restart()
+
+    def close(self) -> None:
+        """Stop every host (blocking)."""
+        for host in self.hosts:
+            host.close()
