@@ -4,6 +4,8 @@ ids (404), an AI race to the finish with its result and replay, stopping, and re
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -19,6 +21,7 @@ from server.db import RaceDatabase, StoredRace, utc_now
 from sim_core.params import DT
 from web.frame import KartFrame, RaceFrame
 
+ROOT = Path(__file__).resolve().parents[1]
 SHORT_RACE = {"track": "oval", "laps": 1, "karts": [{"controller": "lane-follower"}, {"controller": "fixed-lqng"}]}
 
 
@@ -209,3 +212,15 @@ def test_results_survive_a_restart_and_dead_races_are_aborted(tmp_path: Path) ->
         start_race(c, **{**SHORT_RACE, "laps": 5})
         refused = c.post("/api/races", json=SHORT_RACE)
         assert refused.status_code == 429 and "races are running" in refused.json()["detail"]
+
+
+def test_the_drive_client_example_runs_as_written(live: LiveServer) -> None:
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "drive_client.py"), "--url", live.url, "--laps", "1"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=ROOT,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "race finished" in done.stdout and "drive_client.py" in done.stdout
