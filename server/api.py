@@ -16,7 +16,6 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.requests import HTTPConnection
 from fastapi.responses import JSONResponse
 
-from controllers.hierarchical import HierarchicalController
 from controllers.registry import ControllerSpec
 from server.db import StoredRace
 from server.drivers import HUMAN
@@ -37,6 +36,7 @@ from server.models import (
     TrackOut,
 )
 from server.session import KartEntry, RaceConfig, RaceSession
+from sim_core.params import DT
 from sim_core.track import Track
 from sim_core.track_io import builtin_track_names, get_track
 
@@ -259,7 +259,7 @@ def _drivers_live(session: RaceSession) -> list[DriverStatusOut]:
             hangs=d.hangs,
             missed_deadlines=d.missed,
             planner_faults=d.planner_faults,
-            plans_applied=d.controller.plans_applied if isinstance(d.controller, HierarchicalController) else 0,
+            plans_applied=d.plans_applied,
             disabled=d.disabled,
             braking=d.braking,
             driver_connected=d.connected if d.human else None,
@@ -280,12 +280,12 @@ def _drivers_stored(race: StoredRace) -> list[DriverStatusOut]:
                 name=kart["name"],
                 controller=kart["controller"],
                 controller_faults=k.get("controller_faults", 0),
-                exceptions=0,
-                hangs=0,
-                missed_deadlines=0,
-                planner_faults=0,
-                plans_applied=0,
-                disabled=False,
+                exceptions=k.get("exceptions", 0),
+                hangs=k.get("hangs", 0),
+                missed_deadlines=k.get("missed_deadlines", 0),
+                planner_faults=k.get("planner_faults", 0),
+                plans_applied=k.get("plans_applied", 0),
+                disabled=k.get("disabled", False),
                 braking=False,
                 driver_connected=False if kart["controller"] == HUMAN else None,
                 last_error=k.get("last_error"),
@@ -325,7 +325,7 @@ def _detail_stored(races: LiveRaces, race: StoredRace) -> RaceDetailOut:
         seed=race.seed,
         kart_preset=race.kart_preset,
         start_lanes=race.start_lanes,
-        step=round((race.duration or 0.0) * 50),
+        step=round((race.duration or 0.0) / DT),
         drivers=_drivers_stored(race),
         tick_stats=TickStatsOut(**race.tick_stats) if race.tick_stats else None,
         **_links(races, race.id),

@@ -89,6 +89,11 @@ class KartDriver:
         """Exceptions, hangs, missed deadlines and failed plans of this kart's controller."""
         return self.exceptions + self.hangs + self.missed + self.planner_faults
 
+    @property
+    def plans_applied(self) -> int:
+        """Plans its hierarchical controller has received (0 for other controllers)."""
+        return self.controller.plans_applied if isinstance(self.controller, HierarchicalController) else 0
+
     def reset(self, context: RaceContext) -> None:
         """Prepare the controller for the race (hierarchical ones: the tracker only; planners live in workers)."""
         assert self.controller is not None

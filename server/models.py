@@ -185,7 +185,11 @@ class KartResultOut(BaseModel):
     buffer_violations: int
     delta_r: float | None = Field(description="[m] mean distance from the planned lane at checkpoints")
     delta_v: float | None = Field(description="[m/s] mean difference from the planned speed at checkpoints")
-    controller_faults: int
+    controller_faults: int = Field(description="exceptions + hangs + missed deadlines + failed plans")
+    exceptions: int
+    hangs: int
+    missed_deadlines: int
+    planner_faults: int
     last_error: str | None = None
 
 

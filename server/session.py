@@ -8,8 +8,9 @@ shutdown). The result and the replay are then stored; the race stays live for a 
 
 Each tick (see :mod:`server.ticks` for the schedule) does only bounded work on the event loop: deliver plans
 that came back from the planner workers, read the newest controller inputs (never waiting for them), step the
-world, hand the new observations to the driver thread, request due plans, build the :class:`RaceFrame` and
-push it to the scene and the subscribers.
+world, hand the new observations to the karts' controller workers (:mod:`server.hosts` processes, or threads:
+:mod:`server.drivers`), request due plans, build the :class:`RaceFrame` and push it to the scene and the
+subscribers.
 """
 
 from __future__ import annotations
@@ -564,6 +565,14 @@ class RaceSession:
                     "delta_r": kr.delta_r,
                     "delta_v": kr.delta_v,
                     "controller_faults": d.faults,
+                    "exceptions": d.exceptions,
+                    "hangs": d.hangs,
+                    "missed_deadlines": d.missed,
+                    "planner_faults": d.planner_faults,
+                    "plans_applied": d.controller.plans_applied
+                    if isinstance(d.controller, HierarchicalController)
+                    else 0,
+                    "disabled": d.disabled,
                     "last_error": d.last_error,
                 }
             )

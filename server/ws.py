@@ -30,7 +30,7 @@ from pydantic import ValidationError
 
 from server.api import Races
 from server.drivers import KartDriver
-from server.models import DriveInput
+from server.models import DriveInput, ResultOut
 from server.session import RaceSession
 from server.ticks import sleep_until
 
@@ -137,7 +137,7 @@ async def _send_states(websocket: WebSocket, session: RaceSession, driver: KartD
             if not session.live:
                 async with lock:
                     await websocket.send_text(
-                        json.dumps({"type": "end", "status": session.status, "result": session.result})
+                        json.dumps({"type": "end", "status": session.status, "result": _public(session.result)})
                     )
                     await websocket.close(code=1000, reason=f"race {session.status}")
                 return
@@ -145,8 +145,13 @@ async def _send_states(websocket: WebSocket, session: RaceSession, driver: KartD
         return
 
 
+def _public(result: dict[str, Any] | None) -> dict[str, Any] | None:
+    """A stored result as GET /api/races/{id}/result shows it."""
+    return ResultOut.model_validate(result).model_dump(mode="json") if result is not None else None
+
+
 def _result_message(race_id: str, race_status: str, result: dict[str, Any] | None) -> str:
-    return json.dumps({"type": "result", "race_id": race_id, "status": race_status, "result": result})
+    return json.dumps({"type": "result", "race_id": race_id, "status": race_status, "result": _public(result)})
 
 
 @router.websocket("/races/{race_id}/telemetry")
