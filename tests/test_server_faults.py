@@ -6,7 +6,6 @@ The faulty drivers reach the server through ``create_app(controllers=...)``, nev
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -20,7 +19,7 @@ from controllers.registry import REGISTRY, ControllerSpec
 from sim_core.observation import Observation
 
 HANG_S = 0.3
-RELEASE = threading.Event()  # set at the end so the hung threads finish
+HANG_FOR_S = 30.0  # [s] the hanger's hang (its thread is abandoned; a daemon, it does not keep the process)
 
 
 class Raiser:
@@ -49,7 +48,7 @@ class Hanger(Raiser):
         """Stands still, then hangs."""
         self.calls += 1
         if self.calls > 20:
-            RELEASE.wait(60)
+            time.sleep(HANG_FOR_S)
         return Action(0.0, 0.0)
 
 
@@ -79,13 +78,15 @@ FAULTY = {
 }
 
 
-@pytest.fixture(scope="module")
-def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
+@pytest.fixture(scope="module", params=[1, 0], ids=["controller-host", "threads"])
+def live(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
+    """A real-time server whose controllers run in a host process, or (0 hosts) in threads of the server."""
     db = tmp_path_factory.mktemp("faults") / "karting.db"
-    settings = server_settings(db, speedup=1.0, controller_hang_s=HANG_S, controller_hold_s=0.3)
+    settings = server_settings(
+        db, speedup=1.0, controller_hang_s=HANG_S, controller_hold_s=0.3, controller_hosts=request.param
+    )
     with LiveServer(settings, controllers={**REGISTRY, **FAULTY}) as server:
         yield server
-    RELEASE.set()
 
 
 @pytest.fixture(scope="module")
