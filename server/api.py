@@ -294,41 +294,44 @@ def _drivers_stored(race: StoredRace) -> list[DriverStatusOut]:
     return out
 
 
-def _links(races: LiveRaces, race_id: str) -> dict[str, str | None]:
-    return {
-        "viewer_url": _viewer_url(races, race_id),
-        "telemetry_url": f"/api/races/{race_id}/telemetry",
-        "result_url": f"/api/races/{race_id}/result",
-        "replay_url": f"/api/races/{race_id}/replay",
-    }
+def _detail(races: LiveRaces, summary: RaceSummaryOut, **fields: Any) -> RaceDetailOut:
+    race_id = summary.id
+    return RaceDetailOut(
+        **summary.model_dump(),
+        **fields,
+        viewer_url=_viewer_url(races, race_id),
+        telemetry_url=f"/api/races/{race_id}/telemetry",
+        result_url=f"/api/races/{race_id}/result",
+        replay_url=f"/api/races/{race_id}/replay",
+    )
 
 
 def _detail_live(races: LiveRaces, session: RaceSession) -> RaceDetailOut:
     stats = session.tick_stats()
     config = session.config
-    return RaceDetailOut(
-        **_summary_live(session).model_dump(),
+    return _detail(
+        races,
+        _summary_live(session),
         seed=config.seed,
         kart_preset=config.kart_preset,
         start_lanes=list(config.start_lanes) if config.start_lanes is not None else None,
         step=session.frame.step if session.frame is not None else 0,
         drivers=_drivers_live(session),
         tick_stats=TickStatsOut(**stats) if stats is not None else None,
-        **_links(races, session.id),
         error=session.error,
     )
 
 
 def _detail_stored(races: LiveRaces, race: StoredRace) -> RaceDetailOut:
-    return RaceDetailOut(
-        **_summary_stored(race).model_dump(),
+    return _detail(
+        races,
+        _summary_stored(race),
         seed=race.seed,
         kart_preset=race.kart_preset,
         start_lanes=race.start_lanes,
         step=round((race.duration or 0.0) / DT),
         drivers=_drivers_stored(race),
         tick_stats=TickStatsOut(**race.tick_stats) if race.tick_stats else None,
-        **_links(races, race.id),
         error=None,
     )
 
@@ -386,8 +389,8 @@ async def race_ticks(race_id: str, races: Races) -> TicksOut:
         recent = session.schedule.recent_jitter_ms() if session.schedule is not None else []
         return TicksOut(race_id=race_id, stats=TickStatsOut(**stats) if stats else None, recent_jitter_ms=recent)
     race = await _stored_or_404(races, race_id)
-    stats = TickStatsOut(**race.tick_stats) if race.tick_stats else None
-    return TicksOut(race_id=race_id, stats=stats, recent_jitter_ms=[])
+    stored = TickStatsOut(**race.tick_stats) if race.tick_stats else None
+    return TicksOut(race_id=race_id, stats=stored, recent_jitter_ms=[])
 
 
 def _not_over(race_id: str, race_status: str) -> HTTPException:

@@ -44,7 +44,7 @@ def _scene_factory(settings: Settings) -> SceneFactory | None:
     except ImportError as exc:
         log.warning("no 3D view: web.scene is not available (%s)", exc)
         return None
-    return RaceScene  # type: ignore[no-any-return]
+    return RaceScene
 
 
 def _web_router(races: Callable[[], LiveRaces]) -> APIRouter | None:

@@ -54,7 +54,9 @@ POSE_COLUMNS = [st.F_X, st.F_Y, st.F_HEADING, st.F_SPEED]
 class Scene(Protocol):
     """A race's 3D view (``web.scene.RaceScene``): fed one frame per tick."""
 
-    port: int
+    @property
+    def port(self) -> int:
+        """The scene server's local TCP port."""
 
     def update(self, frame: RaceFrame) -> None:
         """Show ``frame`` (cheap, never blocks)."""

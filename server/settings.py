@@ -12,27 +12,44 @@ class Settings(BaseSettings):
     model_config = SettingsConfigDict(env_prefix="KARTING_", extra="ignore")
 
     host: str = "127.0.0.1"
-    port: int = Field(8000, ge=0, le=65535)
+    port: int = Field(default=8000, ge=0, le=65535)
     database_url: str = "sqlite:///./karting.db"  # SQLite files are opened in WAL mode
-    max_sessions: int = Field(16, ge=1, description="races live at once (starting, waiting or running)")
-    max_laps: int = Field(20, ge=1)
+    max_sessions: int = Field(default=16, ge=1, description="races live at once (starting, waiting or running)")
+    max_laps: int = Field(default=20, ge=1)
     viewer_enabled: bool = True  # one 3D scene (viser) per race, served under /races/{id}/viewer/
-    plan_workers: int = Field(1, ge=1, description="planner worker processes shared by every race")
+    plan_workers: int = Field(default=1, ge=1, description="planner worker processes shared by every race")
     controller_hosts: int = Field(
-        1, ge=0, description="processes running the AI controllers (0: a thread per AI kart in the server process)"
+        default=1,
+        ge=0,
+        description="processes running the AI controllers (0: a thread per AI kart in the server process)",
     )
-    speedup: float = Field(1.0, gt=0.0, le=100.0, description="tick rate multiple of 50 Hz (tests); 1 = real time")
-    drive_timeout_s: float = Field(0.5, gt=0.0, description="[s] wall time without driver input before braking")
-    human_wait_s: float = Field(120.0, ge=0.0, description="[s] a race waits this long for its human drivers")
-    controller_hold_s: float = Field(0.5, ge=0.0, description="[s] race time a faulty AI kart holds its input")
-    controller_hang_s: float = Field(1.0, gt=0.0, description="[s] wall time after which a busy AI call is hung")
-    controller_reset_s: float = Field(20.0, gt=0.0, description="[s] wall time allowed for a driver's reset")
-    plan_timeout_s: float = Field(10.0, gt=0.0, description="[s] wall time after which a plan request is lost")
-    telemetry_hz: float = Field(25.0, gt=0.0, le=50.0, description="[Hz] telemetry messages per second")
-    keep_finished_s: float = Field(60.0, ge=0.0, description="[s] a finished race stays live (scene, sockets)")
+    speedup: float = Field(
+        default=1.0, gt=0.0, le=100.0, description="tick rate as a multiple of 50 Hz (tests); 1 = real time"
+    )
+    drive_timeout_s: float = Field(
+        default=0.5, gt=0.0, description="[s] wall time without driver input before the kart brakes"
+    )
+    human_wait_s: float = Field(default=120.0, ge=0.0, description="[s] a race waits this long for its human drivers")
+    controller_hold_s: float = Field(
+        default=0.5, ge=0.0, description="[s] race time a kart holds its input without a fresh one, then brakes"
+    )
+    controller_hang_s: float = Field(
+        default=1.0, gt=0.0, description="[s] wall time after which an unanswered controller call is hung"
+    )
+    controller_reset_s: float = Field(default=20.0, gt=0.0, description="[s] wall time allowed for a driver's reset")
+    plan_timeout_s: float = Field(
+        default=10.0, gt=0.0, description="[s] wall time after which a plan request is given up"
+    )
+    telemetry_hz: float = Field(default=25.0, gt=0.0, le=50.0, description="[Hz] telemetry messages per second")
+    keep_finished_s: float = Field(
+        default=60.0, ge=0.0, description="[s] a finished race stays in memory (scene, sockets) this long"
+    )
     realtime_priority: int = Field(
-        0, ge=0, le=99, description="SCHED_FIFO priority of the server's threads (0: ordinary; needs CAP_SYS_NICE)"
+        default=0,
+        ge=0,
+        le=99,
+        description="SCHED_FIFO priority of the server's threads (0: ordinary scheduling; needs CAP_SYS_NICE)",
     )
     switch_interval_s: float = Field(
-        0.0005, gt=0.0, description="[s] sys.setswitchinterval: how long a busy thread may keep the GIL"
+        default=0.0005, gt=0.0, description="[s] sys.setswitchinterval: how long a busy thread may keep the GIL"
     )

@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import httpx
@@ -15,7 +15,8 @@ import pytest
 import viser
 from test_server_harness import LiveServer, server_settings, start_race, wait_for, wait_status
 from websockets.exceptions import ConnectionClosed
-from websockets.sync.client import ClientConnection, connect
+from websockets.sync.client import connect
+from websockets.sync.connection import Connection
 
 DRIVE_TIMEOUT_S = 0.3
 HUMAN_RACE = {
@@ -57,7 +58,7 @@ def drive_url(live: LiveServer, race: dict[str, Any], kart: int = 0, token: str 
 class Driver:
     """A scripted driver: sends inputs at 50 Hz and keeps every message the server sends back."""
 
-    def __init__(self, ws: ClientConnection) -> None:
+    def __init__(self, ws: Connection) -> None:
         self.ws = ws
         self.states: list[dict[str, Any]] = []
         self.errors: list[str] = []
@@ -75,6 +76,13 @@ class Driver:
                 self.states.append(message)
             elif message["type"] == "error":
                 self.errors.append(message["error"])
+
+    def until(self, condition: Callable[[], object], timeout: float = 5.0) -> None:
+        """Keep reading until ``condition()`` holds."""
+        give_up = time.monotonic() + timeout
+        while not condition():
+            assert time.monotonic() < give_up, "the server did not answer in time"
+            self.drain(0.005)
 
     def drive(self, steer: float, throttle: float, seconds: float) -> None:
         """Hold ``steer`` and ``throttle`` for ``seconds``, sending them 50 times a second."""
@@ -129,11 +137,8 @@ def test_inputs_are_reflected_within_two_ticks(live: LiveServer, client: httpx.C
             driver.drain(0.0)
             sent_at_step = driver.states[-1]["step"]
             ws.send(json.dumps({"steer": 0.0, "throttle": 0.5, "seq": seq}))
-            reflected = wait_for(
-                lambda s=seq: next((m for m in driver.states if m["input_seq"] == s), None) or driver.drain(0.005),
-                2.0,
-                0.0,
-            )
+            driver.until(lambda s=seq: any(m["input_seq"] == s for m in driver.states))  # type: ignore[misc]
+            reflected = next(m for m in driver.states if m["input_seq"] == seq)
             delays.append(reflected["step"] - sent_at_step)
     # applied at the next tick; one more tick of slack for a state message still in flight when it was sent
     assert max(delays) <= 2, delays
@@ -179,11 +184,11 @@ def test_bad_messages_get_an_error_and_the_race_goes_on(
         driver = Driver(ws)
         for message, says in bad.items():
             ws.send(message)
-            wait_for(lambda: driver.errors or driver.drain(0.02), 5, 0.0)
+            driver.until(lambda: driver.errors)
             error = driver.errors.pop()
             assert says in error, (message, error)
         ws.send(json.dumps({"steer": 0.1, "throttle": 0.8, "seq": 42}))
-        wait_for(lambda: any(s["input_seq"] == 42 for s in driver.states) or driver.drain(0.02), 5, 0.0)
+        driver.until(lambda: any(s["input_seq"] == 42 for s in driver.states))
     before = client.get(f"/api/races/{race['id']}").json()
     time.sleep(0.3)
     after = client.get(f"/api/races/{race['id']}").json()

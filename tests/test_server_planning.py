@@ -42,7 +42,8 @@ def sleepy_controller() -> HierarchicalController:
 
 
 def _worker_pids(pool: PlannerPool) -> list[int]:
-    return [p.pid for w in pool._workers for p in w.executor._processes.values()]  # type: ignore[attr-defined]
+    processes = [p for w in pool._workers for p in w.executor._processes.values()]  # type: ignore[attr-defined]
+    return [p.pid for p in processes if p.pid is not None]
 
 
 def test_plans_survive_a_dead_and_a_hung_worker() -> None:
