@@ -1,10 +1,11 @@
 """The drivers of a live race: per kart an AI controller or a human on the drive websocket, and the thread
-that runs the AI controllers off the tick task.
+that runs an AI controller off the tick task.
 
 The tick task never waits for a controller. Each tick it hands the newest observation of each AI kart to its
-:class:`DriverThread` and reads the newest inputs the thread has finished (one tick of latency). A kart whose
-controller raises, hangs or is late holds its last input; after a while without a fresh input it brakes.
-Every such event is counted on the kart (:attr:`KartDriver.faults`).
+:class:`KartWorker` (a :class:`DriverThread` here, or a kart in a controller host process,
+:mod:`server.hosts`) and reads the newest inputs it has finished (one tick of latency). A kart whose controller
+raises, hangs or is late holds its last input; after a while without a fresh input it brakes. Every such event
+is counted on the kart (:attr:`KartDriver.faults`).
 """
 
 from __future__ import annotations
@@ -41,8 +42,8 @@ def brake_throttle(speed: float) -> float:
 class KartDriver:
     """One kart's driver in a live race, its held inputs and its fault record.
 
-    Counters are written by one side each (``exceptions`` by the driver thread, the rest by the tick task),
-    so no lock is needed.
+    Counters are written by one side each (``exceptions`` by the controller's worker, the rest by the tick
+    task), so no lock is needed.
     """
 
     def __init__(
