@@ -98,7 +98,7 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
                 log.info("the server runs at SCHED_FIFO priority %d", settings.realtime_priority)
             else:
                 log.warning("real-time priority not allowed here (needs CAP_SYS_NICE); running as usual")
-        # the tick task waits at most this long for a controller thread to give up the GIL
+        # the event loop waits at most about this long for a busy thread to give up the GIL
         sys.setswitchinterval(settings.switch_interval_s)
         db = await asyncio.to_thread(RaceDatabase, settings.database_url)
         aborted = await asyncio.to_thread(db.abort_unfinished)
