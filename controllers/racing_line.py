@@ -10,6 +10,7 @@ the usual forward (acceleration) / backward (braking) pass under the cornering s
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import osqp
@@ -33,10 +34,26 @@ class RacingLine:
     lap_time: float  # [s] predicted lap time of the speed profile
     checkpoint_lanes: tuple[int, ...]  # lane (1-based) nearest to the line at each checkpoint
 
+    @cached_property
+    def _closed(self) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+        # the samples with the first one repeated one lap on: np.interp's period= re-sorts on every call
+        length = float(self.s[-1] + (self.s[1] - self.s[0]))
+        return (
+            length,
+            np.append(self.s, self.s[0] + length),
+            np.append(self.offset, self.offset[0]),
+            np.append(self.speed, self.speed[0]),
+        )
+
     def offset_at(self, s: float | np.ndarray) -> float | np.ndarray:
         """Lateral offset [m] of the line at centre-line progress ``s`` (periodic interpolation)."""
-        length = self.s[-1] + (self.s[1] - self.s[0])
-        return np.interp(np.mod(s, length), self.s, self.offset, period=length)
+        length, s_closed, offset_closed, _ = self._closed
+        return np.interp(np.mod(s, length), s_closed, offset_closed)
+
+    def speed_at(self, s: float | np.ndarray) -> float | np.ndarray:
+        """Speed [m/s] of the line's profile at centre-line progress ``s`` (periodic interpolation)."""
+        length, s_closed, _, speed_closed = self._closed
+        return np.interp(np.mod(s, length), s_closed, speed_closed)
 
 
 def _centre_samples(track: Track, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -125,7 +125,7 @@ class LQNGTracker:
         p = self.params
         assert self._line is not None and self._context is not None
         # never faster than the racing line's speed profile here (it already brakes for the corners ahead)
-        here = np.interp(kart.progress, self._line.s, self._line.speed, period=self._context.track.length)
+        here = self._line.speed_at(kart.progress)
         target = min(top, float(here))
         for w in (first, second):
             dist = math.hypot(w.position[0] - kart.x, w.position[1] - kart.y)
