@@ -7,7 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
-from controllers.tactical.planner import Plan
+from controllers.plan import Plan
 from sim_core.observation import Observation
 from sim_core.params import KartParams
 from sim_core.track import Track
@@ -67,3 +67,37 @@ class Tracker(Protocol):
 
     def act(self, observation: Observation, plan: Plan | None) -> Action:
         """Inputs that follow ``plan`` (or a sensible default without one)."""
+
+
+@runtime_checkable
+class PlanningDriver(Protocol):
+    """A driver that plans off the tick: a high-level planner at its own (slow) rate and a tracker at the
+    simulation rate. Hosts ask this capability instead of a concrete class: headless races plan in line
+    (``act`` does everything), the live server plans in a worker with :meth:`wants_plan`,
+    :meth:`mark_plan_requested` and :meth:`deliver`, and tracks with :meth:`track`.
+    """
+
+    name: str
+    rate_hz: float
+    planner: HighLevelPlanner
+    plan_latency: float  # [s] simulated delay between requesting and applying a plan (headless races)
+    plans_applied: int
+    active_plan: Plan | None
+
+    def reset(self, context: RaceContext) -> None:
+        """Prepare for a new race."""
+
+    def act(self, observation: Observation) -> Action:
+        """Plan when due (in line), apply ready plans and track."""
+
+    def wants_plan(self, time: float) -> bool:
+        """Whether a re-plan is due at race time ``time``."""
+
+    def mark_plan_requested(self, time: float) -> None:
+        """Record that a plan was requested elsewhere at race time ``time``."""
+
+    def deliver(self, plan: Plan) -> None:
+        """Make ``plan`` the active plan."""
+
+    def track(self, observation: Observation) -> Action:
+        """The tracker's inputs for the active plan, without planning."""

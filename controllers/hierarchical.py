@@ -13,9 +13,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from controllers.base import Action, HighLevelPlanner, RaceContext, Tracker
+from controllers.plan import Plan, Waypoint
 from controllers.racing_line import RacingLine, optimise_racing_line
 from controllers.tactical.game import GameParams
-from controllers.tactical.planner import Plan, PlayerState, TacticalPlanner, Waypoint
+from controllers.tactical.planner import PlayerState, TacticalPlanner
 from sim_core.observation import Observation
 from sim_core.params import SIM_HZ
 from sim_core.rules import lane_change_update

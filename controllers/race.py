@@ -9,10 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from controllers.base import Controller, RaceContext
-from controllers.hierarchical import HierarchicalController
+from controllers.base import Controller, PlanningDriver, RaceContext
+from controllers.plan import Plan
 from controllers.registry import make_controller
-from controllers.tactical.planner import Plan
 from sim_core.observation import observe
 from sim_core.params import DT, SimParams, kart_preset
 from sim_core.track_io import get_track, load_track
@@ -79,7 +78,7 @@ def run_race(spec: RaceSpec, *, record: bool = False) -> RaceOutcome:
     world.reset(start_lanes=spec.start_lanes)
     drivers: list[Controller] = [make_controller(name) for name in spec.controllers]
     for k, driver in enumerate(drivers):
-        if isinstance(driver, HierarchicalController):
+        if isinstance(driver, PlanningDriver):
             driver.plan_latency = spec.plan_latency
         driver.reset(RaceContext(track, params.kart, k, n, world.lane_change_limit, spec.seed * 1000 + k))
     replay = Replay(track.name, DT) if record else None
@@ -94,7 +93,7 @@ def run_race(spec: RaceSpec, *, record: bool = False) -> RaceOutcome:
             if step % hold[k] == 0 and not observations[k].me.finished:
                 action = driver.act(observations[k])
                 actions[0, k] = (action.steer, action.throttle)
-                if isinstance(driver, HierarchicalController) and driver.plans_applied != applied[k]:
+                if isinstance(driver, PlanningDriver) and driver.plans_applied != applied[k]:
                     applied[k] = driver.plans_applied
                     if driver.active_plan is not None:
                         _targets_from(world, k, driver.active_plan)

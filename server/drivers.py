@@ -19,7 +19,7 @@ from typing import Any, Protocol
 
 from controllers.base import Controller, RaceContext
 from controllers.hierarchical import HierarchicalController
-from controllers.tactical.planner import Plan
+from controllers.plan import Plan
 from server.loop import step_below_realtime
 from sim_core.observation import Observation
 from sim_core.params import DT

@@ -28,7 +28,7 @@ from typing import Any
 
 from controllers.base import Controller, RaceContext
 from controllers.hierarchical import HierarchicalController
-from controllers.tactical.planner import Plan
+from controllers.plan import Plan
 from server.drivers import DriverThread, KartDriver
 from server.loop import step_below_realtime
 from sim_core.observation import Observation

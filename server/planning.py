@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from controllers.base import Controller, HighLevelPlanner, RaceContext
-from controllers.tactical.planner import Plan
+from controllers.plan import Plan
 from server.loop import make_ordinary
 from sim_core.observation import Observation
 

@@ -28,9 +28,9 @@ import numpy as np
 
 from controllers.base import RaceContext
 from controllers.hierarchical import HierarchicalController
+from controllers.plan import Plan
 from controllers.race import Replay
 from controllers.registry import ControllerSpec
-from controllers.tactical.planner import Plan
 from server.db import RaceDatabase, utc_now
 from server.drivers import HUMAN, DriverThread, KartDriver, KartWorker, brake_throttle
 from server.hosts import ControllerHosts

@@ -13,8 +13,8 @@ import pytest
 from controllers.base import RaceContext
 from controllers.hierarchical import HierarchicalController
 from controllers.lq.tracker import LQNGTracker
+from controllers.plan import Plan
 from controllers.registry import REGISTRY
-from controllers.tactical.planner import Plan
 from server.planning import PlannerPool, PlannerSetup, PlannerUnavailableError
 from sim_core.observation import Observation, observe
 from sim_core.params import SimParams

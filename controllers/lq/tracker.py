@@ -24,8 +24,8 @@ import numpy as np
 
 from controllers.base import Action, RaceContext
 from controllers.lq.nash import feedback_nash
+from controllers.plan import Plan, Waypoint
 from controllers.racing_line import RacingLine, optimise_racing_line
-from controllers.tactical.planner import Plan, Waypoint
 from sim_core.observation import KartView, Observation
 from sim_core.params import DT
 from sim_core.track import Track

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from controllers.plan import Plan, Waypoint
 from controllers.tactical import discrete as dg
 from controllers.tactical.discrete import apply_move
 from controllers.tactical.game import TIME_UNITS_PER_S, WEAR_UNITS, GameParams, GameTables, build_tables
@@ -34,38 +35,6 @@ class PlayerState:
     time: float  # [s] race time of that crossing
     wear: float  # [-] tyre wear at that crossing
     lane_changes: int  # the referee's eq. (9) counter
-
-
-@dataclass(frozen=True)
-class Waypoint:
-    """A planned (or predicted) pass of one kart through a checkpoint."""
-
-    checkpoint: int  # absolute checkpoint index
-    lane: int  # 1-based
-    position: tuple[float, float]  # [m] the lane point
-    speed: float  # [m/s] target speed (top of the planned velocity bin)
-    time: float  # [s] predicted arrival, relative to the root's leader
-
-
-@dataclass(frozen=True)
-class Plan:
-    """The planner's answer: ego waypoints and every other player's predicted waypoints."""
-
-    ego: int
-    root_checkpoint: int
-    waypoints: dict[int, tuple[Waypoint, ...]]  # kart index -> waypoints in checkpoint order
-    iterations: int
-    nodes: int
-    seconds: float  # [s] wall time of the search
-
-    @property
-    def ego_waypoints(self) -> tuple[Waypoint, ...]:
-        """The ego kart's waypoints."""
-        return self.waypoints.get(self.ego, ())
-
-    def opponent_waypoints(self) -> dict[int, tuple[Waypoint, ...]]:
-        """Predicted waypoints of the other players."""
-        return {k: w for k, w in self.waypoints.items() if k != self.ego}
 
 
 class TacticalPlanner:
