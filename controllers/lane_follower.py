@@ -21,7 +21,7 @@ class LaneFollowerParams:
 
     lookahead_time: float = 0.45  # [s] lookahead distance = max(min_lookahead, speed * this)
     min_lookahead: float = 3.0  # [m]
-    speed_gain: float = 1.5  # [1/(m/s)] throttle per m/s of speed error
+    acceleration_gain: float = 6.0  # [1/s] commanded acceleration [m/s^2] per m/s of speed error
     grip_margin: float = 0.9  # [-] fraction of the lateral limit it plans to use
     preview: float = 40.0  # [m] how far ahead it looks for corners
 
@@ -78,7 +78,8 @@ class LaneFollower:
         v_corner = np.sqrt(a_lat * radius)
         v_allowed = np.sqrt(v_corner**2 + 2.0 * self.kart.braking * p.grip_margin * self._preview_offsets)
         target = np.minimum(np.min(v_allowed, axis=-1), np.minimum(self.kart.top_speed, speed_cap))
-        throttle = np.clip(p.speed_gain * (target - speeds), -1.0, 1.0)
+        # the commanded acceleration through the kart's own longitudinal model (drag included)
+        throttle = self.kart.throttle_for_acceleration(speeds, p.acceleration_gain * (target - speeds))
         return np.stack([steer, throttle], axis=-1)
 
     def _frame(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -161,18 +161,22 @@ _LINES: dict[tuple[object, ...], RacingLine] = {}
 
 
 def optimise_racing_line(track: Track, kart: KartParams, *, wear: float = 0.25, margin: float = 1.0) -> RacingLine:
-    """The fastest of a family of QP lines kept ``margin`` m inside the walls, with its speed profile.
+    """:func:`compute_racing_line`, cached per track, kart, wear and margin: a hierarchical driver's planner and
+    tracker both need the line."""
+    key = (track.name, float(track.length), track.n_checkpoints, float(track.checkpoint_s.sum()), kart, wear, margin)
+    cached = _LINES.get(key)
+    if cached is None:
+        cached = _LINES[key] = compute_racing_line(track, kart, wear=wear, margin=margin)
+    return cached
 
-    Cached per track, kart, wear and margin: a hierarchical driver's planner and tracker both need the line.
+
+def compute_racing_line(track: Track, kart: KartParams, *, wear: float = 0.25, margin: float = 1.0) -> RacingLine:
+    """The fastest of a family of QP lines kept ``margin`` m inside the walls, with its speed profile (no cache).
 
     Each line minimises squared curvature plus a weight times squared segment length (curvature matters
     where the kart is grip-limited, length where it is not); the weight is chosen by the lap time of the
     speed profile. Weight 0 is the pure minimum-curvature line.
     """
-    key = (track.name, float(track.length), track.n_checkpoints, float(track.checkpoint_s.sum()), kart, wear, margin)
-    cached = _LINES.get(key)
-    if cached is not None:
-        return cached
     s, centre, normal, ((h_curv, q_curv), (h_len, q_len)), lower, upper = _line_qp(track, margin, LINE_SPACING)
     scale = h_curv.diagonal().sum() / h_len.diagonal().sum()
     best: RacingLine | None = None
@@ -183,7 +187,6 @@ def optimise_racing_line(track: Track, kart: KartParams, *, wear: float = 0.25, 
         if best is None or lap_time < best.lap_time:
             best = RacingLine(s, offset, xy, speed, lap_time, _lanes_at_checkpoints(track, s, offset))
     assert best is not None
-    _LINES[key] = best
     return best
 
 

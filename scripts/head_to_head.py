@@ -30,7 +30,17 @@ def main(
     wins = [0, 0]
     finished = [0, 0]
     per_kart: list[dict[str, list[float]]] = [
-        {"faults": [], "illegal": [], "safety": [], "delta_r": [], "delta_v": [], "time": []} for _ in names
+        {
+            "faults": [],
+            "illegal": [],
+            "illegal_per_step": [],
+            "illegal_checkpoint": [],
+            "safety": [],
+            "delta_r": [],
+            "delta_v": [],
+            "time": [],
+        }
+        for _ in names
     ]
     for i in range(races):
         seed = first_seed + i
@@ -44,6 +54,8 @@ def main(
             finished[k] += kart.finished
             stats["faults"].append(kart.collisions_at_fault)
             stats["illegal"].append(kart.illegal_lane_changes)
+            stats["illegal_per_step"].append(kart.illegal_lane_changes_per_step)
+            stats["illegal_checkpoint"].append(kart.illegal_lane_changes_checkpoint)
             stats["safety"].append(kart.safety_score)
             if kart.delta_r is not None:
                 stats["delta_r"].append(kart.delta_r)
@@ -53,7 +65,7 @@ def main(
                 stats["time"].append(kart.finish_time)
         figures = [
             f"{names[k]} {kart.finish_time or float('nan'):.2f}s "
-            f"f{kart.collisions_at_fault} i{kart.illegal_lane_changes}"
+            f"f{kart.collisions_at_fault} i{kart.illegal_lane_changes_per_step}/{kart.illegal_lane_changes_checkpoint}"
             for k, kart in enumerate(result.karts)
         ]
         print(f"race {i:3d} seed {seed} lanes {lanes} winner {result.winner} | " + " | ".join(figures), flush=True)

@@ -49,6 +49,7 @@ class TrackArrays(NamedTuple):
     checkpoint_normal: np.ndarray  # (N, 2) left normal
     straight: np.ndarray  # (N,) bool: section i (checkpoint i -> i+1) is straight
     lane_offsets: np.ndarray  # (N, n_lanes) left-positive lateral offsets of the lanes at each checkpoint
+    sample_lane_offsets: np.ndarray  # (M, n_lanes) the same at every centre-line sample
     wall_segments: np.ndarray  # (W, 4) [ax, ay, ex, ey] of every (simplified) wall segment
     ray_origin: np.ndarray  # (2,) corner of the ray grid
     ray_cell: float  # [m] its cell size
@@ -133,6 +134,7 @@ def track_arrays(track: Track) -> TrackArrays:
         checkpoint_normal=np.ascontiguousarray(normals, dtype=np.float64),
         straight=np.ascontiguousarray(track.straight_flags),
         lane_offsets=np.ascontiguousarray(np.stack([track.lane_offsets(c) for c in range(track.n_checkpoints)])),
+        sample_lane_offsets=np.ascontiguousarray(track.sample_lane_offsets(), dtype=np.float64),
         wall_segments=np.ascontiguousarray(np.hstack([seg_a, seg_e])),
         ray_origin=grid.origin,
         ray_cell=float(RAY_CELL),

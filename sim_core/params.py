@@ -43,6 +43,8 @@ class KartParams:
     body_half_length: float = 0.55  # [m] half length of the capsule's axis (body length 2.0 m)
     body_radius: float = 0.45  # [m] capsule radius (body width 0.9 m)
     wall_friction: float = 0.5  # [-] Coulomb coefficient: sliding speed lost per unit of speed into a wall
+    # A wall turns the body toward its tangent no faster than this (the kart slides along it meanwhile).
+    wall_yaw_rate: float = 3.0  # [rad/s]
 
     def lateral_limit(self, wear: float | np.ndarray) -> float | np.ndarray:
         """Lateral acceleration limit [m/s^2] for a tyre-wear proportion in [0, 1]."""
@@ -64,6 +66,20 @@ class KartParams:
         radius = np.asarray(radius, dtype=float)
         v = np.sqrt(self.lateral_limit(wear) * np.abs(radius))
         return np.where(radius > 0.0, np.minimum(v, self.top_speed), self.top_speed)
+
+    def throttle_for_acceleration(self, speed: float | np.ndarray, acceleration: float | np.ndarray) -> np.ndarray:
+        """Throttle in [-1, 1] realising ``acceleration`` [m/s^2] at forward ``speed`` [m/s], coasting drag included
+        (vectorised; the compiled :func:`sim_core.kart.throttle_for_acceleration` is the same inverse)."""
+        speed = np.asarray(speed, dtype=float)
+        accel = np.nan_to_num(np.asarray(acceleration, dtype=float), nan=0.0)
+        ratio = np.minimum(np.abs(speed) / self.top_speed, 1.0)
+        curve = self.low_speed_gain + (1.0 - self.low_speed_gain) * ratio * ratio
+        drag = self.coasting_drag
+        forward = (accel + drag) / (self.acceleration * curve + drag)
+        braking = (accel + drag) / (self.braking * curve - drag)
+        throttle = np.where(accel >= -drag, forward, braking)
+        throttle = np.where((speed <= 1e-3) & (accel <= 0.0), 0.0, throttle)
+        return np.clip(throttle, -1.0, 1.0)
 
     def as_array(self) -> np.ndarray:
         """Parameters packed for the compiled step kernel (order fixed by :data:`KART_PARAM_FIELDS`)."""
@@ -87,6 +103,7 @@ KART_PARAM_FIELDS: tuple[str, ...] = (
     "body_half_length",
     "body_radius",
     "wall_friction",
+    "wall_yaw_rate",
 )
 
 PAPER_KART = KartParams()
@@ -111,6 +128,9 @@ def kart_preset(name: str) -> KartParams:
         raise ValueError(f"unknown kart preset {name!r}; known: {sorted(KART_PRESETS)}") from None
 
 
+LANE_COUNTING_RULES = ("per_step", "checkpoint")
+
+
 @dataclass(frozen=True)
 class RuleParams:
     """Racing rules and metric settings of the referee (paper section 3, spec section 4)."""
@@ -123,8 +143,25 @@ class RuleParams:
     buffer_side: float = 0.5  # [m] s0: minimum nose-to-body distance when not directly behind (eq. 7-8)
     buffer_behind: float = 1.5  # [m] s1: minimum nose-to-body distance when directly behind (eq. 7-8)
     behind_lateral_overlap: float = 1.2  # [m] "directly behind" when lateral offsets differ by less than this
+    # Lane changes: "per_step" counts them as they happen (the paper's eqs. (10)-(11)); "checkpoint" samples
+    # the lane at checkpoint crossings only (the original implementation, behind the paper's tables).
+    # Both counts are recorded in every result; this one is the safety score's.
+    lane_change_counting: str = "per_step"
+    lane_hysteresis: float = 0.25  # [m] a kart joins a lane this far past the midpoint between two lanes
+    # Fault when two karts touch: the follower (the paper's rule), unless they are alongside (the gap
+    # between them along the track under this), then the kart that moved laterally into the other.
+    alongside_gap: float = (
+        1.0  # [m] along the track between the centres: one nose at least level with the other's centre
+    )
+    lateral_fault_speed: float = 0.3  # [m/s] lateral speed toward the other kart that counts as moving into it
     lane_deadzone: float = 1.3  # [m] delta_r counts max(distance to target lane point - this, 0), as the original
     start_wear: float = 0.25  # [-] tyre wear of every kart at the start of a race
+
+    def __post_init__(self) -> None:
+        if self.lane_change_counting not in LANE_COUNTING_RULES:
+            raise ValueError(
+                f"lane_change_counting must be one of {LANE_COUNTING_RULES}, got {self.lane_change_counting!r}"
+            )
 
 
 @dataclass(frozen=True)

@@ -25,14 +25,15 @@ F_WEAR = 13  # [-] tyre wear proportion (derived from F_ACC_YAW, kept for observ
 F_CROSS_TIME = 14  # [s] race time of the last checkpoint crossing (interpolated within the step)
 F_CROSS_SPEED = 15  # [m/s] speed at the last checkpoint crossing
 F_CROSS_WEAR = 16  # [-] tyre wear at the last checkpoint crossing
-N_FLOAT = 17
+F_SLIP = 17  # [rad] slip angle: the centre moves along heading + slip
+N_FLOAT = 18
 
 # integers per kart
 I_CENTRE_IDX = 0  # centre-line sample nearest to the kart (search hint)
 I_CP_PASSED = 1  # checkpoints passed since the start (0 = start line; laps * N = finished)
 I_LANE = 2  # lane (1-based) at the last checkpoint crossing
-I_LANE_COUNT = 3  # eq. (9) counter of lanes crossed on the current straight / curve run
-I_ILLEGAL = 4  # illegal lane changes
+I_LANE_COUNT = 3  # eq. (10) counter sampled at checkpoint crossings (the original's way)
+I_ILLEGAL = 4  # illegal lane changes under the race's counting rule (the one in the safety score)
 I_FAULTS = 5  # collisions at fault
 I_LAST_FAULT_STEP = 6  # step of the last at-fault contact (for the 1.5 s merge window)
 I_WALL_HITS = 7  # wall hits (contacts separated by more than the fault cooldown)
@@ -44,7 +45,11 @@ I_FINISHED = 12  # 1 once finished
 I_CONTACTS = 13  # kart-kart contacts (rising edges), at fault or not
 I_EVENTS = 14  # bit mask of what happened to this kart in the last step (EV_*)
 I_LAST_WALL_STEP = 15  # step of the last wall contact (contacts within the fault cooldown are one hit)
-N_INT = 16
+I_LANE_NOW = 16  # lane (1-based) the kart is in now: lane membership with hysteresis, every step
+I_STEP_LANE_COUNT = 17  # eq. (10) counter counted as lane changes happen (every step)
+I_ILLEGAL_STEP = 18  # illegal lane changes counted every step (eq. 11)
+I_ILLEGAL_CHECKPOINT = 19  # illegal lane changes sampled at checkpoint crossings (the original's rule)
+N_INT = 20
 
 # integers per race
 R_STEP = 0  # steps simulated
@@ -78,4 +83,12 @@ RP_LAPS = 9
 RP_DT = 10
 RP_RAY_RANGE = 11
 RP_RAY_ORIGIN = 12
-N_RULE = 13
+RP_LANE_HYSTERESIS = 13
+RP_LANE_COUNTING = 14  # LANE_COUNTING_PER_STEP or LANE_COUNTING_CHECKPOINT
+RP_ALONGSIDE = 15
+RP_LATERAL_FAULT_SPEED = 16
+N_RULE = 17
+
+# lane-change counting rules (RP_LANE_COUNTING)
+LANE_COUNTING_PER_STEP = 0
+LANE_COUNTING_CHECKPOINT = 1

@@ -29,7 +29,17 @@ from sim_core.geometry import (
     ray_first_wall,
     segment_closest,
 )
-from sim_core.kart import P_HALF_LENGTH, P_RADIUS, P_WALL_FRICTION, kart_step, tyre_wear
+from sim_core.kart import (
+    P_HALF_LENGTH,
+    P_RADIUS,
+    P_REVERSE_SPEED,
+    P_TOP_SPEED,
+    P_WALL_FRICTION,
+    P_WALL_YAW_RATE,
+    kart_step,
+    max_slip,
+    tyre_wear,
+)
 from sim_core.rules import front_touches, lane_change_update, required_buffer
 from sim_core.state import (
     EV_CHECKPOINT,
@@ -48,6 +58,7 @@ from sim_core.state import (
     F_FINISH_TIME,
     F_HEADING,
     F_S,
+    F_SLIP,
     F_SPEED,
     F_STEER,
     F_THROTTLE,
@@ -68,14 +79,20 @@ from sim_core.state import (
     I_FAULTS,
     I_FINISHED,
     I_ILLEGAL,
+    I_ILLEGAL_CHECKPOINT,
+    I_ILLEGAL_STEP,
     I_LANE,
     I_LANE_COUNT,
+    I_LANE_NOW,
     I_LAST_FAULT_STEP,
     I_LAST_WALL_STEP,
+    I_STEP_LANE_COUNT,
     I_WALL_CONTACT,
     I_WALL_HITS,
+    LANE_COUNTING_CHECKPOINT,
     R_DONE,
     R_STEP,
+    RP_ALONGSIDE,
     RP_BEHIND_OVERLAP,
     RP_BUFFER_BEHIND,
     RP_BUFFER_SIDE,
@@ -83,9 +100,12 @@ from sim_core.state import (
     RP_CONTACT_MARGIN,
     RP_DT,
     RP_FAULT_COOLDOWN_STEPS,
+    RP_LANE_COUNTING,
     RP_LANE_DEADZONE,
+    RP_LANE_HYSTERESIS,
     RP_LANE_LIMIT,
     RP_LAPS,
+    RP_LATERAL_FAULT_SPEED,
     RP_RAY_ORIGIN,
     RP_RAY_RANGE,
     RP_TIME_LIMIT_STEPS,
@@ -103,10 +123,21 @@ CONTACT_ROUNDS = 4  # relaxation rounds of wall and kart-kart contact per step
 
 @njit(**_NO_REFCOUNT)
 def _resolve_walls(
-    tr: TrackArrays, kp: np.ndarray, F: np.ndarray, I: np.ndarray, b: int, k: int, dt: float, located: np.ndarray
+    tr: TrackArrays,
+    kp: np.ndarray,
+    F: np.ndarray,
+    I: np.ndarray,
+    b: int,
+    k: int,
+    dt: float,
+    located: np.ndarray,
+    heading_before: float,
 ) -> bool:
     """Push kart k out of the walls; a kart driving into a wall slides along it and loses speed.
 
+    The slide is the kart's direction of travel at once (its slip angle takes the difference, up to the
+    kinematic limit); the body turns toward the wall's tangent at most ``wall_yaw_rate`` from
+    ``heading_before`` (its heading before this step's contacts), so a wall never snaps the heading.
     ``located[k]`` keeps [x, y, s, d, sample index] of the kart's last located position (the referee reuses
     it when the kart has not moved since).
     """
@@ -140,7 +171,8 @@ def _resolve_walls(
         F[b, k, F_X] = x + push_x * worst
         F[b, k, F_Y] = y + push_y * worst
         speed = F[b, k, F_SPEED]
-        ux, uy = speed * ch, speed * sh
+        course = h + F[b, k, F_SLIP]
+        ux, uy = speed * math.cos(course), speed * math.sin(course)
         into = ux * push_x + uy * push_y
         if into < 0.0:
             tx, ty = -push_y, push_x  # a wall tangent
@@ -152,13 +184,17 @@ def _resolve_walls(
             sign = 1.0 if along > 0.0 else -1.0
             # Coulomb friction: the harder the kart drives into the wall, the more sliding speed it loses
             slide = max(abs(along) + kp[P_WALL_FRICTION] * into, 0.0)
-            vx, vy = sign * tx, sign * ty
-            if speed >= 0.0:
-                F[b, k, F_HEADING] = math.atan2(vy, vx)
-                F[b, k, F_SPEED] = slide
-            else:
-                F[b, k, F_HEADING] = math.atan2(-vy, -vx)
-                F[b, k, F_SPEED] = -slide
+            slide_dir = math.atan2(sign * ty, sign * tx)
+            # the body's course (heading + slip) points along the slide, backwards when reversing
+            course_target = slide_dir if speed >= 0.0 else _wrap_angle(slide_dir + math.pi)
+            turn_limit = kp[P_WALL_YAW_RATE] * dt
+            turned = _wrap_angle(course_target - heading_before)
+            turned = min(max(turned, -turn_limit), turn_limit)
+            new_heading = _wrap_angle(heading_before + turned)
+            slip_limit = max_slip(kp)
+            F[b, k, F_HEADING] = new_heading
+            F[b, k, F_SLIP] = min(max(_wrap_angle(course_target - new_heading), -slip_limit), slip_limit)
+            F[b, k, F_SPEED] = slide if speed >= 0.0 else -slide
     return touched
 
 
@@ -216,8 +252,10 @@ def _resolve_pair(
             # equal masses, perfectly inelastic along the normal; the no-slip kart keeps its heading component
             uix, uiy = vi * ci - 0.5 * closing * nx, vi * si_ - 0.5 * closing * ny
             ujx, ujy = vj * cj + 0.5 * closing * nx, vj * sj_ + 0.5 * closing * ny
-            F[b, i, F_SPEED] = uix * ci + uiy * si_
-            F[b, j, F_SPEED] = ujx * cj + ujy * sj_
+            # a push never takes a kart past its own speed limits
+            top, reverse = kp[P_TOP_SPEED], -kp[P_REVERSE_SPEED]
+            F[b, i, F_SPEED] = min(max(uix * ci + uiy * si_, reverse), top)
+            F[b, j, F_SPEED] = min(max(ujx * cj + ujy * sj_, reverse), top)
     return True, i_faults, j_faults
 
 
@@ -247,6 +285,7 @@ def step_race(
     scratch_located: np.ndarray,
     scratch_fan: np.ndarray,
     scratch_centre: np.ndarray,
+    scratch_touch: np.ndarray,
 ) -> None:
     """Advance race ``b`` by one step (no-op once the race is done); ``scratch_*`` are work arrays."""
     if R[b, R_DONE]:
@@ -260,6 +299,8 @@ def step_race(
     r = kp[P_RADIUS]
     prev_s = scratch_f[0]
     prev_d = scratch_f[1]
+    heading_before = scratch_f[2]  # after the dynamics, before contacts
+    speed_before = scratch_f[3]
     located = scratch_located
 
     # ---- dynamics
@@ -270,18 +311,21 @@ def step_race(
         if I[b, k, I_FINISHED]:
             continue
         steer, throttle = actions[b, k, 0], actions[b, k, 1]
-        x, y, h, v, w, acc = kart_step(
+        x, y, h, v, slip, w, acc = kart_step(
             kp,
             F[b, k, F_X],
             F[b, k, F_Y],
             F[b, k, F_HEADING],
             F[b, k, F_SPEED],
+            F[b, k, F_SLIP],
             F[b, k, F_ACC_YAW],
             steer,
             throttle,
             dt,
         )
         F[b, k, F_X], F[b, k, F_Y], F[b, k, F_HEADING], F[b, k, F_SPEED] = x, y, h, v
+        F[b, k, F_SLIP] = slip
+        heading_before[k], speed_before[k] = h, v
         F[b, k, F_YAW_RATE], F[b, k, F_ACC_YAW] = w, acc
         F[b, k, F_WEAR] = tyre_wear(kp, acc)
         F[b, k, F_STEER] = min(max(steer, -1.0), 1.0) if steer == steer else 0.0
@@ -291,15 +335,18 @@ def step_race(
     wall_touch = scratch_b[0]
     fault_touch = scratch_b[1]
     contact = scratch_pairs
+    first_touch = scratch_touch[0]  # [i, j], i < j: touching in the first contact round
+    front = scratch_touch[1]  # [i, j]: i's front touches j (first round)
     wall_touch[:] = False
     fault_touch[:] = False
     contact[:, :] = False
+    first_touch[:, :] = False
     margin = rp[RP_CONTACT_MARGIN]
     cone = rp[RP_CONE_COS]
     any_pair = False
     for rnd in range(CONTACT_ROUNDS):
         for k in range(K):
-            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp, F, I, b, k, dt, located):
+            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp, F, I, b, k, dt, located, heading_before[k]):
                 wall_touch[k] = True
         any_pair = False
         for i in range(K):
@@ -313,23 +360,26 @@ def step_race(
                     any_pair = True
                     contact[i, j] = True
                     if rnd == 0:
-                        fault_touch[i] |= i_fault
-                        fault_touch[j] |= j_fault
+                        first_touch[i, j] = True
+                        front[i, j] = i_fault
+                        front[j, i] = j_fault
         if not any_pair:
             break
     if any_pair:
         # kart-kart pushes of the last round may have moved a kart into a wall
         for k in range(K):
-            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp, F, I, b, k, dt, located):
+            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp, F, I, b, k, dt, located, heading_before[k]):
                 wall_touch[k] = True
 
     # ---- referee: progress, checkpoints, lanes, lane-change rule, plan following, finish
     laps = int(rp[RP_LAPS])
     lane_limit = int(rp[RP_LANE_LIMIT])
     deadzone = rp[RP_LANE_DEADZONE]
+    by_checkpoint = int(rp[RP_LANE_COUNTING]) == LANE_COUNTING_CHECKPOINT
     for k in range(K):
         if I[b, k, I_FINISHED]:
             continue
+        passed_before = I[b, k, I_CP_PASSED]
         x, y = F[b, k, F_X], F[b, k, F_Y]
         if x == located[k, 0] and y == located[k, 1] and I[b, k, I_CENTRE_IDX] == located[k, 4]:
             # not moved since the wall check located it (locate from its own result returns the same)
@@ -371,8 +421,10 @@ def step_race(
             I[b, k, I_LANE_COUNT] = count
             I[b, k, I_LANE] = lane
             if illegal:
-                I[b, k, I_ILLEGAL] += 1
-                I[b, k, I_EVENTS] |= EV_ILLEGAL_LANE_CHANGE
+                I[b, k, I_ILLEGAL_CHECKPOINT] += 1
+                if by_checkpoint:
+                    I[b, k, I_ILLEGAL] += 1
+                    I[b, k, I_EVENTS] |= EV_ILLEGAL_LANE_CHANGE
             wanted = target_lane[b, k, c]
             if wanted > 0:
                 miss = abs(d_cross - tr.lane_offsets[c, wanted - 1])
@@ -388,11 +440,32 @@ def step_race(
                 I[b, k, I_FINISHED] = 1
                 F[b, k, F_FINISH_TIME] = (step + frac) * dt
                 I[b, k, I_EVENTS] |= EV_FINISHED
+        # eqs. (10)-(11) as they happen: the lane the kart is in now (with hysteresis), every step
+        lane_now = _lane_with_hysteresis(tr.sample_lane_offsets[idx], d, I[b, k, I_LANE_NOW], rp[RP_LANE_HYSTERESIS])
+        count, illegal = lane_change_update(
+            I[b, k, I_STEP_LANE_COUNT],
+            I[b, k, I_LANE_NOW],
+            lane_now,
+            tr.straight[passed_before % N],
+            tr.straight[I[b, k, I_CP_PASSED] % N],
+            lane_limit,
+        )
+        I[b, k, I_STEP_LANE_COUNT] = count
+        I[b, k, I_LANE_NOW] = lane_now
+        if illegal:
+            I[b, k, I_ILLEGAL_STEP] += 1
+            if not by_checkpoint:
+                I[b, k, I_ILLEGAL] += 1
+                I[b, k, I_EVENTS] |= EV_ILLEGAL_LANE_CHANGE
 
     # ---- collisions at fault, contacts and safety buffers (headings are final from here on)
     body = scratch_bodies
     _bodies(b, F, hl, body)
     cooldown = int(rp[RP_FAULT_COOLDOWN_STEPS])
+    for i in range(K):
+        for j in range(i + 1, K):
+            if first_touch[i, j]:
+                _charge_contact(tr, F, I, b, i, j, front, speed_before, rp, fault_touch)
     for k in range(K):
         if fault_touch[k]:
             if step - I[b, k, I_LAST_FAULT_STEP] > cooldown:
@@ -453,6 +526,79 @@ def step_race(
             centre[k, 0] = I[b, k, I_CENTRE_IDX]
             centre[k, 1] = F[b, k, F_D]
         cast_rays(b, F, I, ray_dist, ray_hit, tr, kp, rp, ray_bins, ray_cos, ray_sin, body, scratch_fan, centre)
+
+
+@njit(cache=True, inline="always")
+def _lane_with_hysteresis(offsets: np.ndarray, d: float, current: int, hysteresis: float) -> int:
+    """The lane (1-based) a kart at lateral offset ``d`` is in, given the lane ``current`` it was in: the nearest
+    lane, but a kart leaves its lane only once it is ``hysteresis`` past the midpoint toward the other."""
+    nearest = 0
+    best = abs(offsets[0] - d)
+    for q in range(1, offsets.shape[0]):
+        gap = abs(offsets[q] - d)
+        if gap < best:
+            best, nearest = gap, q
+    nearest += 1
+    if nearest == current or current < 1:
+        return nearest
+    if abs(offsets[current - 1] - d) - best > 2.0 * hysteresis:
+        return nearest
+    return current
+
+
+@njit(**_NO_REFCOUNT)
+def _charge_contact(
+    tr: TrackArrays,
+    F: np.ndarray,
+    I: np.ndarray,
+    b: int,
+    i: int,
+    j: int,
+    front: np.ndarray,
+    speed_before: np.ndarray,
+    rp: np.ndarray,
+    fault_touch: np.ndarray,
+) -> None:
+    """Who is at fault for a new contact of karts i and j (paper section 3: the follower is responsible).
+
+    Apart along the track by ``RP_ALONGSIDE`` or more: the follower, if its front touched the other (the
+    original's frontal cone). Alongside (closer than that): each kart that was moving laterally toward the
+    other faster than ``RP_LATERAL_FAULT_SPEED``; both when both did (each broke the rule by itself; calling
+    it a racing incident would let a kart swerve into one that is correcting its own line unpunished); neither
+    when neither did (side-by-side rubbing).
+    """
+    L = tr.length
+    ahead = _wrap_mod(F[b, j, F_S] - F[b, i, F_S] + 0.5 * L, L) - 0.5 * L  # > 0: j leads
+    if abs(ahead) >= rp[RP_ALONGSIDE]:
+        if ahead > 0.0:
+            fault_touch[i] |= front[i, j]
+        else:
+            fault_touch[j] |= front[j, i]
+        return
+    toward_j = 1.0 if F[b, j, F_D] > F[b, i, F_D] else -1.0
+    threshold = rp[RP_LATERAL_FAULT_SPEED]
+    if _lateral_speed(tr, F, I, b, i, speed_before[i]) * toward_j > threshold:
+        fault_touch[i] = True
+    if -_lateral_speed(tr, F, I, b, j, speed_before[j]) * toward_j > threshold:
+        fault_touch[j] = True
+
+
+@njit(cache=True, inline="always")
+def _lateral_speed(tr: TrackArrays, F: np.ndarray, I: np.ndarray, b: int, k: int, speed: float) -> float:
+    """Kart k's velocity [m/s] across the track (left-positive), at ``speed`` along its course."""
+    idx = I[b, k, I_CENTRE_IDX]
+    tx, ty = tr.seg_tangent[idx, 0], tr.seg_tangent[idx, 1]
+    course = F[b, k, F_HEADING] + F[b, k, F_SLIP]
+    return speed * (math.cos(course) * -ty + math.sin(course) * tx)
+
+
+@njit(cache=True, inline="always")
+def _wrap_angle(a: float) -> float:
+    """``a`` wrapped into [-pi, pi)."""
+    w = a + math.pi
+    if not 0.0 < w < 2.0 * math.pi:
+        w %= 2.0 * math.pi
+    return w - math.pi
 
 
 @njit(cache=True, inline="always")
@@ -581,13 +727,14 @@ def step_batch(
     ray_sin = np.sin(ray_angles)
     ray_bins = (ray_angles + math.pi) % (2.0 * math.pi) - math.pi  # the bin offsets of the ray angles
     ray_bins *= tr.ray_bins / (2.0 * math.pi)
-    scratch_f = np.empty((2, K))
+    scratch_f = np.empty((4, K))
     scratch_b = np.zeros((2, K), dtype=np.bool_)
     scratch_pairs = np.zeros((K, K), dtype=np.bool_)
     scratch_bodies = np.empty((K, 6))
     scratch_located = np.full((K, 5), np.nan)
     scratch_fan = np.empty((3, ray_angles.shape[0]))
     scratch_centre = np.empty((K, 2))
+    scratch_touch = np.zeros((2, K, K), dtype=np.bool_)
     for _ in range(n_steps):
         for b in range(F.shape[0]):
             step_race(
@@ -615,6 +762,7 @@ def step_batch(
                 scratch_located,
                 scratch_fan,
                 scratch_centre,
+                scratch_touch,
             )
 
 

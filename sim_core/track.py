@@ -145,6 +145,13 @@ class Track:
         frac = np.asarray(self.lane_fractions)
         return np.where(frac > 0, frac * self.lane_half_left[i], frac * self.lane_half_right[i])
 
+    def sample_lane_offsets(self) -> np.ndarray:
+        """(M, n_lanes) left-positive lateral offsets [m] of the lanes at every centre-line sample."""
+        frac = np.asarray(self.lane_fractions)[None, :]
+        left = np.asarray(self.lane_half_left)[:, None]
+        right = np.asarray(self.lane_half_right)[:, None]
+        return np.where(frac > 0, frac * left, frac * right)
+
     def lane_point(self, checkpoint: int, lane: int) -> np.ndarray:
         """World position [m] of ``lane`` (1-based) on the line of ``checkpoint`` (taken modulo a lap)."""
         if not 1 <= lane <= self.n_lanes:

@@ -33,7 +33,7 @@ class KartResult:
     laps_completed: int
     checkpoints_passed: int
     collisions_at_fault: int
-    illegal_lane_changes: int
+    illegal_lane_changes: int  # under the race's counting rule (RuleParams.lane_change_counting)
     safety_score: int  # collisions at fault + illegal lane changes
     wall_hits: int
     contacts: int
@@ -41,6 +41,10 @@ class KartResult:
     delta_r: float | None  # [m] mean target-lane distance at checkpoints that had a target
     delta_v: float | None  # [m/s] mean target-speed difference at checkpoints that had a target
     position: int  # 1-based finishing / running order
+    # both lane-change counts, whichever rule the race used (eqs. (10)-(11) as they happen; the original's
+    # checkpoint sampling, comparable with the paper's tables)
+    illegal_lane_changes_per_step: int = 0
+    illegal_lane_changes_checkpoint: int = 0
 
 
 @dataclass(frozen=True)
@@ -118,6 +122,12 @@ class World:
         v[st.RP_DT] = DT
         v[st.RP_RAY_RANGE] = sensors.max_range
         v[st.RP_RAY_ORIGIN] = sensors.origin_forward
+        v[st.RP_LANE_HYSTERESIS] = rules.lane_hysteresis
+        v[st.RP_LANE_COUNTING] = (
+            st.LANE_COUNTING_CHECKPOINT if rules.lane_change_counting == "checkpoint" else st.LANE_COUNTING_PER_STEP
+        )
+        v[st.RP_ALONGSIDE] = rules.alongside_gap
+        v[st.RP_LATERAL_FAULT_SPEED] = rules.lateral_fault_speed
         return v
 
     # ------------------------------------------------------------------ setup
@@ -207,6 +217,7 @@ class World:
         i[st.I_CP_PASSED] = lap * track.n_checkpoints + passed
         last_cp = passed % track.n_checkpoints
         i[st.I_LANE] = track.lane_id(last_cp, d)
+        i[st.I_LANE_NOW] = i[st.I_LANE]
         i[st.I_LAST_FAULT_STEP] = -(10**9)
         i[st.I_LAST_WALL_STEP] = -(10**9)
 
@@ -352,6 +363,8 @@ class World:
                     delta_r=float(f[st.F_DR_SUM] / i[st.I_DR_COUNT]) if i[st.I_DR_COUNT] else None,
                     delta_v=float(f[st.F_DV_SUM] / i[st.I_DV_COUNT]) if i[st.I_DV_COUNT] else None,
                     position=order.index(k) + 1,
+                    illegal_lane_changes_per_step=int(i[st.I_ILLEGAL_STEP]),
+                    illegal_lane_changes_checkpoint=int(i[st.I_ILLEGAL_CHECKPOINT]),
                 )
             )
         finishers = [kr for kr in karts if kr.finished]

@@ -15,12 +15,12 @@ from sim_core.params import DT, GRAVITY, ORIGINAL_KART, PAPER_KART, KartParams
 def drive_straight(params: KartParams, speed: float, throttle: float, until, max_steps: int = 100_000):
     """Step one kart straight ahead until ``until(speed)``; returns (steps, distance, speed)."""
     p = params.as_array()
-    x = y = heading = 0.0
+    x = y = heading = slip = 0.0
     acc_yaw = 0.0
     for step in range(max_steps):
         if until(speed):
             return step, x, speed
-        x, y, heading, speed, _, acc_yaw = kart_step(p, x, y, heading, speed, acc_yaw, 0.0, throttle, DT)
+        x, y, heading, speed, slip, _, acc_yaw = kart_step(p, x, y, heading, speed, slip, acc_yaw, 0.0, throttle, DT)
     raise AssertionError("condition never reached")
 
 
@@ -82,10 +82,10 @@ def circle_speed(params: KartParams, steer: float, wear: float, seconds: float =
     """Hold full throttle and a fixed steer; return (final speed, measured path radius)."""
     p = params.as_array()
     acc_yaw = params.yaw_for_wear(wear)
-    x = y = heading = 0.0
+    x = y = heading = slip = 0.0
     speed = 0.0
     for _ in range(int(seconds / DT)):
-        x, y, heading, speed, yaw_rate, _ = kart_step(p, x, y, heading, speed, acc_yaw, steer, 1.0, DT)
+        x, y, heading, speed, slip, yaw_rate, _ = kart_step(p, x, y, heading, speed, slip, acc_yaw, steer, 1.0, DT)
         # wear is frozen to test the steady state at that wear level
     return speed, speed / abs(yaw_rate)
 
@@ -115,10 +115,10 @@ def test_wear_lowers_the_cornering_speed() -> None:
 
 def test_wear_grows_exponentially_with_accumulated_yaw() -> None:
     p = PAPER_KART.as_array()
-    x = y = heading = 0.0
+    x = y = heading = slip = 0.0
     speed, acc_yaw = 8.0, 0.0
     for _ in range(int(60 / DT)):
-        x, y, heading, speed, _yaw_rate, acc_yaw = kart_step(p, x, y, heading, speed, acc_yaw, 0.5, 0.3, DT)
+        x, y, heading, speed, slip, _yaw_rate, acc_yaw = kart_step(p, x, y, heading, speed, slip, acc_yaw, 0.5, 0.3, DT)
     # accumulated yaw is the integral of |yaw rate| (about 2 pi per full circle driven)
     assert acc_yaw > 2 * math.pi
     wear = float(PAPER_KART.wear_from_yaw(acc_yaw))
@@ -129,15 +129,15 @@ def test_wear_grows_exponentially_with_accumulated_yaw() -> None:
 
 def test_nan_and_out_of_range_inputs_are_clamped() -> None:
     p = PAPER_KART.as_array()
-    base = kart_step(p, 0.0, 0.0, 0.0, 5.0, 0.0, 1.0, 1.0, DT)
-    clamped = kart_step(p, 0.0, 0.0, 0.0, 5.0, 0.0, 7.0, 3.0, DT)
+    base = kart_step(p, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 1.0, 1.0, DT)
+    clamped = kart_step(p, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 7.0, 3.0, DT)
     assert np.allclose(base, clamped)
-    nan_in = kart_step(p, 0.0, 0.0, 0.0, 5.0, 0.0, float("nan"), float("nan"), DT)
-    coast = kart_step(p, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0, DT)
+    nan_in = kart_step(p, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0, float("nan"), float("nan"), DT)
+    coast = kart_step(p, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 0.0, DT)
     assert np.allclose(nan_in, coast)
 
 
 def test_positive_steer_turns_left() -> None:
     p = PAPER_KART.as_array()
-    *_, yaw_rate, _ = kart_step(p, 0.0, 0.0, 0.0, 5.0, 0.0, 0.5, 0.0, DT)
+    *_, yaw_rate, _ = kart_step(p, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.5, 0.0, DT)
     assert yaw_rate > 0

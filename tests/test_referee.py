@@ -81,9 +81,12 @@ def test_wall_hit_is_counted_once_per_contact() -> None:
     track = get_track("oval")
     world = World(track, 1, 1, sensors=False)
     actions = np.array([[[0.4, 1.0]]])  # veer left into the wall and keep pushing
+    touching = []
     for _ in range(150):
         world.step(actions)
-    assert world.istate[0, 0, st.I_WALL_CONTACT] == 1
+        touching.append(int(world.istate[0, 0, st.I_WALL_CONTACT]))
+    # the kart grinds along the wall (touching, pushed off, turning back in): one hit
+    assert sum(touching[-50:]) >= 10
     assert world.istate[0, 0, st.I_WALL_HITS] == 1
 
 
@@ -147,6 +150,11 @@ def test_sliding_along_a_wall_costs_coulomb_friction() -> None:
     approach = previous - 2.0 * 0.02  # this step's coasting
     mu = world.params.kart.wall_friction
     assert world.speeds[0, 0] == pytest.approx(approach * (np.cos(angle) - mu * np.sin(angle)), rel=1e-6)
-    # and it now runs parallel to the wall (the straight heads +y)
-    assert world.headings[0, 0] == pytest.approx(np.pi / 2, abs=1e-3)
+    # the wall turns the body toward its tangent (the straight heads +y) no faster than wall_yaw_rate: no snap
+    turn = world.params.kart.wall_yaw_rate * 0.02
+    assert world.headings[0, 0] == pytest.approx(np.pi / 2 + angle - turn, abs=1e-9)
+    # within half a second it runs parallel to the wall, still sliding, and it was one hit
+    world.step(np.zeros((1, 1, 2)), n_steps=25)
+    assert world.headings[0, 0] == pytest.approx(np.pi / 2, abs=1e-2)
+    assert world.speeds[0, 0] > 0.0
     assert world.istate[0, 0, st.I_WALL_HITS] == 1

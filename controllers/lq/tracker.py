@@ -26,6 +26,7 @@ from controllers.base import Action, RaceContext
 from controllers.lq.nash import feedback_nash
 from controllers.plan import Plan, Waypoint
 from controllers.racing_line import RacingLine, optimise_racing_line
+from sim_core.kart import throttle_for_acceleration
 from sim_core.observation import KartView, Observation
 from sim_core.params import DT
 from sim_core.track import Track
@@ -74,11 +75,13 @@ class LQNGTracker:
         self.params = params or LQNGParams()
         self._context: RaceContext | None = None
         self._line: RacingLine | None = None
+        self._kart_vector = np.zeros(0)
 
     def reset(self, context: RaceContext) -> None:
         """Remember the track and kart limits and get the track's racing line (the shape followed between
         waypoints that agree with it)."""
         self._context = context
+        self._kart_vector = context.kart.as_array()
         self._line = optimise_racing_line(context.track, context.kart)
 
     # ------------------------------------------------------------------ targets
@@ -200,7 +203,7 @@ class LQNGTracker:
         R = [w.control * np.eye(2) for _ in players]
         P, alpha = feedback_nash(A, B, Q, q, R, self.params.horizon)
         accel, yaw_rate = -(P[0][0:2] @ x0) - alpha[0][0:2]
-        throttle = accel / kart.acceleration if accel >= 0.0 else accel / kart.braking
+        throttle = throttle_for_acceleration(self._kart_vector, me.speed, float(accel))
         speed = max(abs(me.speed), 1.0)
         steer = math.atan(yaw_rate * kart.wheelbase / speed) / kart.max_steer_angle
         return Action(float(np.clip(steer, -1.0, 1.0)), float(np.clip(throttle, -1.0, 1.0)))
