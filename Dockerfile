@@ -18,6 +18,7 @@ RUN apt-get update -q \
     && pip install "torch==2.13.0" --index-url https://download.pytorch.org/whl/cpu
 
 COPY pyproject.toml README.md ./
+COPY karting ./karting
 COPY sim_core ./sim_core
 COPY controllers ./controllers
 COPY server ./server

@@ -23,11 +23,10 @@ browser:  ## Debian's chromium for the real-browser test (Playwright cannot down
 run: setup  ## set up, then start the race server on embedded defaults (SQLite file, local workers)
 	$(BIN)/karting serve
 
-test: setup browser  ## set up, then lint and run every test
-	$(BIN)/ruff check .
+test: lint browser  ## set up, then lint, type-check and run every test
 	$(BIN)/python -m pytest -q
 
-lint: setup
+lint: setup  ## ruff (rules, complexity limits), ruff format --check, mypy on every package ([tool.mypy] files)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy

@@ -17,7 +17,9 @@ from controllers.lq.nash import feedback_nash
 REPEATS = 3000
 
 
-def tracker_game(players: int, rng: np.random.Generator):  # type: ignore[no-untyped-def]
+def tracker_game(
+    players: int, rng: np.random.Generator
+) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
     n = 4 * players
     dt = 0.02
     A = np.eye(n)

@@ -160,7 +160,7 @@ def start_server(port: int, db: str, realtime: int) -> subprocess.Popen[bytes]:
         "KARTING_KEEP_FINISHED_S": "2",
         "KARTING_REALTIME_PRIORITY": str(realtime),
     }
-    command = [sys.executable, "-m", "sim_core.cli", "serve", "--port", str(port), "--db", db]
+    command = [sys.executable, "-m", "karting", "serve", "--port", str(port), "--db", db]
     return subprocess.Popen(command, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
 
 

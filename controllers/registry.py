@@ -92,7 +92,20 @@ _SPECS = (
     ),
 )
 
-REGISTRY: Mapping[str, ControllerSpec] = MappingProxyType({spec.name: spec for spec in _SPECS})
+_BY_NAME: dict[str, ControllerSpec] = {spec.name: spec for spec in _SPECS}
+REGISTRY: Mapping[str, ControllerSpec] = MappingProxyType(_BY_NAME)
+
+
+def register(spec: ControllerSpec) -> None:
+    """Add a controller under ``spec.name`` in this process (a plug-in, an example, a test driver).
+
+    Requests still name controllers, never Python paths: only code that runs here can register one. A live
+    server's controller-host processes know the built-in controllers (and any that the modules they import
+    register). A name that is taken raises ``ValueError``.
+    """
+    if spec.name in _BY_NAME:
+        raise ValueError(f"controller {spec.name!r} is already registered")
+    _BY_NAME[spec.name] = spec
 
 
 def controller_names() -> list[str]:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -19,24 +18,21 @@ from sim_core.world import World
 
 @pytest.mark.parametrize("name", controller_names())
 @pytest.mark.parametrize("track_name", ["oval", "complex", "train-oval-small-reversed"])
-def test_every_controller_resets_and_acts_within_budget(name: str, track_name: str) -> None:
+def test_every_controller_resets_and_acts(name: str, track_name: str) -> None:
+    # the time per decision (budget 0.5 s) is measured by benchmarks/decision_time.py: timings on a shared
+    # machine are no test
     track = get_track(track_name)
     world = World(track, 1, 2, SimParams())
     driver = make_controller(name)
     assert isinstance(driver, Controller)
     assert REGISTRY[name].description
     driver.reset(RaceContext(track, world.params.kart, 0, 2, world.lane_change_limit, seed=1))
-    slowest = 0.0
-    for step in range(120):
+    for _ in range(120):
         obs = observe(world, 0)[0]
-        t0 = time.perf_counter()
         action = driver.act(obs)
-        if step > 0:  # the first call may compile and plan
-            slowest = max(slowest, time.perf_counter() - t0)
         assert -1.0 <= action.steer <= 1.0 and -1.0 <= action.throttle <= 1.0
         assert math.isfinite(action.steer) and math.isfinite(action.throttle)
         world.step(np.array([[[action.steer, action.throttle], [0.0, 0.5]]]))
-    assert slowest < 0.5, f"{name} took {slowest:.3f} s for one decision"
     assert world.speeds[0, 0] > 3.0, f"{name} did not drive off"
 
 

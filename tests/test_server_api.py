@@ -216,7 +216,7 @@ def test_results_survive_a_restart_and_dead_races_are_aborted(tmp_path: Path) ->
 
 def test_the_drive_client_example_runs_as_written(live: LiveServer) -> None:
     done = subprocess.run(
-        [sys.executable, str(ROOT / "examples" / "drive_client.py"), "--url", live.url, "--laps", "1"],
+        [sys.executable, str(ROOT / "examples" / "04_drive_client.py"), "--url", live.url, "--laps", "1"],
         capture_output=True,
         text=True,
         timeout=120,

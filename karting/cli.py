@@ -1,4 +1,8 @@
-"""The ``karting`` command line: list and import tracks, run headless races."""
+"""The ``karting`` command line: list and import tracks, run headless races, serve races live.
+
+Each command imports the layers it composes when it runs: ``karting tracks`` needs only :mod:`sim_core`, so it
+does not pay for loading the controllers (numba kernels) or the server (FastAPI, SQLAlchemy, viser).
+"""
 
 from __future__ import annotations
 
@@ -69,7 +73,7 @@ def race(
     replay: Annotated[Path | None, typer.Option(help="write a JSON replay (poses, inputs, plans) here")] = None,
 ) -> None:
     """Run a headless race between registered controllers and print the referee's result."""
-    from controllers.race import RaceSpec, run_race  # controllers compose sim_core, not the reverse
+    from controllers.race import RaceSpec, run_race  # loaded on use (see the module docstring)
     from controllers.registry import controller_names
 
     names = tuple(n.strip() for n in karts.split(",") if n.strip())
@@ -132,7 +136,7 @@ def serve(
     no_viewer: Annotated[bool, typer.Option("--no-viewer", help="run without the 3D view")] = False,
 ) -> None:
     """Run the race server (REST API, websockets, live 3D view) until Ctrl-C."""
-    from server.app import serve as run_server  # the server composes sim_core, not the reverse: imported only here
+    from server.app import serve as run_server  # loaded on use (see the module docstring)
     from server.settings import Settings
 
     overrides: dict[str, object] = {}

@@ -3,8 +3,8 @@ print the result.
 
 Start a server first (``.venv/bin/karting serve``), then from the repo root::
 
-    .venv/bin/python examples/drive_client.py                       # against the lane follower on the oval
-    .venv/bin/python examples/drive_client.py --opponent fixed-lqng --laps 2
+    .venv/bin/python examples/04_drive_client.py                       # against the lane follower on the oval
+    .venv/bin/python examples/04_drive_client.py --opponent fixed-lqng --laps 2
 
 The "driver" is a pure-pursuit steering law on the track's centre line (the client loads the same built-in
 track the server uses) with a speed target that drops in the bends. It answers every state message the server
@@ -17,6 +17,7 @@ import argparse
 import json
 import math
 import time
+from pathlib import Path
 from typing import Any
 
 import httpx
@@ -59,7 +60,7 @@ def main() -> None:
     body = {
         "track": args.track,
         "laps": args.laps,
-        "karts": [{"controller": "human", "name": "drive_client.py"}, {"controller": args.opponent}],
+        "karts": [{"controller": "human", "name": Path(__file__).name}, {"controller": args.opponent}],
     }
     response = httpx.post(f"{args.url}/api/races", json=body, timeout=30)
     if response.status_code != 201:
