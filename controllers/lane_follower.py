@@ -11,7 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim_core.params import KartParams
+from controllers.base import Action, RaceContext
+from sim_core.observation import Observation
+from sim_core.params import SIM_HZ, KartParams
 from sim_core.track import Track
 
 
@@ -91,3 +93,35 @@ class LaneFollower:
         fy = np.interp(s + eps, self._s_ext, self._y_ext) - np.interp(s - eps, self._s_ext, self._y_ext)
         norm = np.hypot(fx, fy)
         return -fy / norm, fx / norm, cx, cy
+
+
+class LaneFollowerController:
+    """The pure-pursuit baseline as a registered driver: it follows the lane it started in."""
+
+    name = "lane-follower"
+    rate_hz = float(SIM_HZ)
+
+    def __init__(self) -> None:
+        self._follower: LaneFollower | None = None
+        self._lateral = 0.0
+
+    def reset(self, context: RaceContext) -> None:
+        """Pick the start lane's offset to follow."""
+        self._follower = LaneFollower(context.track, context.kart)
+        self._lateral = float("nan")
+
+    def act(self, observation: Observation) -> Action:
+        """Pure pursuit on its lane with a curvature-limited speed."""
+        assert self._follower is not None, "reset() first"
+        me = observation.me
+        if self._lateral != self._lateral:
+            self._lateral = me.lateral
+        steer, throttle = self._follower.act(
+            np.array([me.x, me.y]),
+            np.array(me.heading),
+            np.array(me.speed),
+            np.array(me.progress),
+            np.array(me.wear),
+            self._lateral,
+        )
+        return Action(float(steer), float(throttle))

@@ -9,46 +9,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-import numpy as np
-
-from controllers.base import Action, Controller, RaceContext
-from controllers.hierarchical import FixedLinePlanner, HierarchicalController, MCTSPlanner
-from controllers.lane_follower import LaneFollower
+from controllers.base import Controller
+from controllers.fixed_line import FixedLinePlanner
+from controllers.hierarchical import HierarchicalController
+from controllers.lane_follower import LaneFollowerController
 from controllers.lq.tracker import LQNGParams, LQNGTracker, LQNGWeights
-from sim_core.observation import Observation
-from sim_core.params import SIM_HZ
-
-
-class LaneFollowerController:
-    """The pure-pursuit baseline as a registered driver: it follows the lane it started in."""
-
-    name = "lane-follower"
-    rate_hz = float(SIM_HZ)
-
-    def __init__(self) -> None:
-        self._follower: LaneFollower | None = None
-        self._lateral = 0.0
-
-    def reset(self, context: RaceContext) -> None:
-        """Pick the start lane's offset to follow."""
-        self._follower = LaneFollower(context.track, context.kart)
-        self._lateral = float("nan")
-
-    def act(self, observation: Observation) -> Action:
-        """Pure pursuit on its lane with a curvature-limited speed."""
-        assert self._follower is not None, "reset() first"
-        me = observation.me
-        if self._lateral != self._lateral:
-            self._lateral = me.lateral
-        steer, throttle = self._follower.act(
-            np.array([me.x, me.y]),
-            np.array(me.heading),
-            np.array(me.speed),
-            np.array(me.progress),
-            np.array(me.wear),
-            self._lateral,
-        )
-        return Action(float(steer), float(throttle))
+from controllers.tactical.high_level import MCTSPlanner
 
 
 @dataclass(frozen=True)
