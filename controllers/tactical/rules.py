@@ -1,5 +1,5 @@
-"""Compiled rules of the discrete racing game: whose turn it is, which moves are legal, what they lead to,
-and the value of a finished game.
+"""Compiled rules of the discrete racing game: whose turn it is, which moves are legal and what they lead to
+(the value of a finished game is :mod:`controllers.tactical.value`).
 
 A game state is an int64 array of shape (players, N_FIELDS) plus the index of the last completed round.
 Players move one checkpoint per round; within a round the player that reached the checkpoint first (the
@@ -24,7 +24,7 @@ LANE = 1  # 0-based lane
 BIN = 2  # velocity bin
 TIME = 3  # [0.01 s] time state relative to the root's leader
 WEAR = 4  # [1e-4] tyre wear
-LANE_COUNT = 5  # eq. (9) counter
+LANE_COUNT = 5  # eq. (10) gen_lane_var: recent lane changes on this contiguous straight or curve
 PREV_LANE = 6  # 0-based lane at the previous checkpoint (to tell when two players' paths cross)
 N_FIELDS = 7
 
@@ -147,29 +147,3 @@ def apply_move(tb: GameTables, state: np.ndarray, p: int, action: int) -> bool:
     state[p, TIME] = arrival
     state[p, LANE_COUNT] = count
     return True
-
-
-RACE_SHARE = 0.8  # share of the value range given to the time advantage over the others (the rest: own pace)
-
-
-@njit(cache=True)
-def terminal_values(tb: GameTables, state: np.ndarray, reference: np.ndarray, out: np.ndarray) -> None:
-    """Value in [0, 1] of a finished game for every player.
-
-    Mostly (``RACE_SHARE``) the time advantage over the mean of the others, in units of ``value_scale`` and
-    clipped (the paper's objective, eq. 1); the rest rewards the player's own pace against ``reference[p]``
-    (its time under the fast-move rollout policy from the root), so a player far ahead or alone still
-    prefers the faster plan instead of seeing every move as equal.
-    """
-    n = state.shape[0]
-    total = 0
-    for q in range(n):
-        total += state[q, TIME]
-    for p in range(n):
-        pace = min(max((reference[p] - state[p, TIME]) / tb.value_scale, -1.0), 1.0)
-        if n == 1:
-            out[p] = 0.5 + 0.5 * pace
-            continue
-        others = (total - state[p, TIME]) / (n - 1)
-        race = min(max((others - state[p, TIME]) / tb.value_scale, -1.0), 1.0)
-        out[p] = 0.5 + 0.5 * (RACE_SHARE * race + (1.0 - RACE_SHARE) * pace)
