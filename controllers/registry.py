@@ -13,7 +13,7 @@ from controllers.base import Controller
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController
-from controllers.lq.tracker import LQNGParams, LQNGTracker, LQNGWeights
+from controllers.lq.tracker import FIXED_LINE_TRACKING, MCTS_TRACKING, LQNGTracker
 from controllers.tactical.high_level import MCTSPlanner
 
 
@@ -28,13 +28,11 @@ class ControllerSpec:
 
 
 def _mcts_lqng() -> Controller:
-    # the game's speed bins are coarse: planned speeds are a ceiling 3 m/s above the bin, the line's profile binds
-    return HierarchicalController("mcts-lqng", MCTSPlanner(), LQNGTracker(LQNGParams(speed_margin=3.0)))
+    return HierarchicalController("mcts-lqng", MCTSPlanner(), LQNGTracker(MCTS_TRACKING))
 
 
 def _fixed_lqng() -> Controller:
-    fixed = LQNGParams(traffic_lane_tolerance=1.25, weights=LQNGWeights(heading=1.9, deny=0.1, avoid_scale=0.45))
-    return HierarchicalController("fixed-lqng", FixedLinePlanner(), LQNGTracker(fixed))
+    return HierarchicalController("fixed-lqng", FixedLinePlanner(), LQNGTracker(FIXED_LINE_TRACKING))
 
 
 _SPECS = (
