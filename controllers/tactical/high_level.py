@@ -27,7 +27,8 @@ INTERACTION_WINDOW = 1.0  # [s] another kart predicted at a checkpoint this clos
 
 
 def _lanes_legal(track: Track, lane: int, count: int, waypoints: list[Waypoint], limit: int) -> bool:
-    """Whether driving through ``waypoints`` from ``lane`` (lane-change counter ``count``) breaks no rule."""
+    """Whether driving through ``waypoints`` from ``lane`` (lane-change counter ``count``) breaks no rule
+    (eqs. (10) gen_lane_var and (11) gen_lane_lim, the referee's :func:`~sim_core.rules.lane_change_update`)."""
     for w in waypoints:
         c = w.checkpoint
         count, illegal = lane_change_update(

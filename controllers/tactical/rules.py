@@ -54,7 +54,11 @@ def worn_after(tb: GameTables, wear_units: int, yaw: float) -> int:
 
 @njit(cache=True)
 def next_player(state: np.ndarray, round_checkpoint: int) -> int:
-    """The player to move: among those still at ``round_checkpoint``, the one with the smallest time state."""
+    """The player to move: among those still at ``round_checkpoint``, the one with the smallest time state.
+
+    The player behind moves after the leader and sees its choice, so it is the one that must avoid the
+    collision (the paper's rule of eqs. (8)-(9) gen_coll_avoid, section 4.1.2).
+    """
     best = NO_PLAYER
     for p in range(state.shape[0]):
         if state[p, CHECKPOINT] == round_checkpoint and (best == NO_PLAYER or state[p, TIME] < state[best, TIME]):
@@ -74,6 +78,7 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
     n = tb.straight.shape[0]
     c = state[p, CHECKPOINT] % n
     here = state[p, LANE]
+    # eq. (10) gen_lane_var (the counter) and eq. (11) gen_lane_lim (at most L changes on a straight)
     count, illegal = lane_change_update(
         state[p, LANE_COUNT], here, lane, tb.straight[c], tb.straight[(c + 1) % n], tb.lane_limit
     )
@@ -104,6 +109,7 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
     if 0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin]) > entry + 1e-9:
         return 0, 0, 0
     arrival = state[p, TIME] + int(t * 100.0 + 0.5)
+    # eq. (8) gen_coll_avoid as the paper discretises it: no arrival close in time in the same lane or across a path
     if tb.collision_window > 0:
         target = state[p, CHECKPOINT] + 1
         for q in range(state.shape[0]):
