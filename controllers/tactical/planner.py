@@ -18,7 +18,6 @@ from sim_core.track import Track
 
 DEFAULT_EXPLORATION = 0.2  # UCT constant (values in [0, 1], value_scale 1 s): best measured on exact small games
 DEFAULT_GREEDY = 0.8  # probability that a rollout move is the fastest legal one
-WALL_CLOCK_CHUNK = 250  # iterations between wall-clock checks when a time cap is set
 TREE_CAPACITY_PLANS = 8  # a reused tree grows for up to this many plans' budgets before it starts afresh
 PLAN_MIN_VISITS = 30  # a plan follows the search tree only through choices visited at least this often
 
@@ -53,7 +52,6 @@ class TacticalPlanner:
         seed: int = 0,
         exploration: float = DEFAULT_EXPLORATION,
         greedy: float = DEFAULT_GREEDY,
-        max_seconds: float | None = None,
         lane_limit: int | None = None,
     ) -> None:
         self.track = track
@@ -63,7 +61,6 @@ class TacticalPlanner:
         self.seed = seed
         self.exploration = exploration
         self.greedy = greedy
-        self.max_seconds = max_seconds
         self._plans = 0
         self._tree: SearchTree | None = None
         self._tree_root: np.ndarray | None = None
@@ -132,18 +129,10 @@ class TacticalPlanner:
         seed = self.seed * 1_000_003 + self._plans
         self._plans += 1
         t0 = time.perf_counter()
-        if self.max_seconds is None:
-            tree.run(tb, root, horizon, budget, seed, self.exploration, self.greedy, resume=reuse)
-            done = budget
-        else:
-            done = 0
-            while done < budget and (done == 0 or time.perf_counter() - t0 < self.max_seconds):
-                chunk = min(WALL_CLOCK_CHUNK, budget - done)
-                tree.run(tb, root, horizon, chunk, seed + done, self.exploration, self.greedy, resume=reuse or done > 0)
-                done += chunk
+        tree.run(tb, root, horizon, budget, seed, self.exploration, self.greedy, resume=reuse)
         seconds = time.perf_counter() - t0
         self._tree_root = root.copy()
-        return self._extract(tree, karts, ego, int(root[0, rules.CHECKPOINT]), done, seconds)
+        return self._extract(tree, karts, ego, int(root[0, rules.CHECKPOINT]), budget, seconds)
 
     def _extract(
         self, tree: SearchTree, karts: list[int], ego: int, root_cp: int, iterations: int, seconds: float
