@@ -1,22 +1,16 @@
 """Search strength against iterations: how often MCTS's first move is an exactly optimal one.
 
 200 random 2-player states on `oval` and `complex` (velocity bins 2 m/s, horizon 2) are solved exactly by
-backward induction (tests/exact_game.py); MCTS with the planner's defaults then searches each with a growing
-iteration budget. Run from the repo root: ``.venv/bin/python benchmarks/mcts_strength.py``; the last line
+backward induction (controllers/tactical/exact.py); MCTS with the planner's defaults then searches each with a
+growing iteration budget. Run from the repo root: ``.venv/bin/python benchmarks/mcts_strength.py``; the last line
 is one JSON object mapping iterations to the fraction of exactly optimal first moves.
 """
 
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-
-from exact_game import optimal_first_moves
-from test_tactical_planner import random_small_games
-
+from controllers.tactical.exact import optimal_first_moves, random_small_games
 from controllers.tactical.mcts import SearchTree
 from controllers.tactical.planner import DEFAULT_EXPLORATION, DEFAULT_GREEDY
 

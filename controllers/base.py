@@ -1,6 +1,5 @@
 """The controller interface: a small typed Protocol for drivers, and the parts hierarchical drivers are built
-from (a high-level planner that produces a :class:`~controllers.tactical.planner.Plan` and a tracker that
-follows it)."""
+from (a high-level planner that produces a :class:`~controllers.plan.Plan` and a tracker that follows it)."""
 
 from __future__ import annotations
 

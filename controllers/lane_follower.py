@@ -11,19 +11,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim_core.params import KartParams
+from controllers.base import Action, RaceContext
+from controllers.parameters import parameter
+from sim_core.observation import Observation
+from sim_core.params import SIM_HZ, KartParams
 from sim_core.track import Track
 
 
 @dataclass(frozen=True)
 class LaneFollowerParams:
-    """Tuning of :class:`LaneFollower`."""
+    """Tuning of :class:`LaneFollower` (the public parameters of ``lane-follower``; bounds keep it driving)."""
 
-    lookahead_time: float = 0.45  # [s] lookahead distance = max(min_lookahead, speed * this)
-    min_lookahead: float = 3.0  # [m]
-    acceleration_gain: float = 6.0  # [1/s] commanded acceleration [m/s^2] per m/s of speed error
-    grip_margin: float = 0.9  # [-] fraction of the lateral limit it plans to use
-    preview: float = 40.0  # [m] how far ahead it looks for corners
+    lookahead_time: float = parameter(
+        0.45, "lookahead distance = max(min_lookahead, speed * this)", unit="s", minimum=0.0, maximum=2.0
+    )
+    min_lookahead: float = parameter(3.0, "shortest lookahead distance", unit="m", minimum=0.5, maximum=20.0)
+    acceleration_gain: float = parameter(
+        6.0, "commanded acceleration per m/s of speed error", unit="1/s", minimum=0.0, maximum=50.0
+    )
+    grip_margin: float = parameter(0.9, "fraction of the lateral limit it plans to use", minimum=0.1, maximum=1.2)
+    preview: float = parameter(40.0, "how far ahead it looks for corners", unit="m", minimum=1.0, maximum=200.0)
 
 
 class LaneFollower:
@@ -92,3 +99,36 @@ class LaneFollower:
         fy = np.interp(s + eps, self._s_ext, self._y_ext) - np.interp(s - eps, self._s_ext, self._y_ext)
         norm = np.hypot(fx, fy)
         return -fy / norm, fx / norm, cx, cy
+
+
+class LaneFollowerController:
+    """The pure-pursuit baseline as a registered driver: it follows the lane it started in."""
+
+    name = "lane-follower"
+    rate_hz = float(SIM_HZ)
+
+    def __init__(self, params: LaneFollowerParams | None = None) -> None:
+        self.params = params or LaneFollowerParams()
+        self._follower: LaneFollower | None = None
+        self._lateral = 0.0
+
+    def reset(self, context: RaceContext) -> None:
+        """Pick the start lane's offset to follow."""
+        self._follower = LaneFollower(context.track, context.kart, self.params)
+        self._lateral = float("nan")
+
+    def act(self, observation: Observation) -> Action:
+        """Pure pursuit on its lane with a curvature-limited speed."""
+        assert self._follower is not None, "reset() first"
+        me = observation.me
+        if self._lateral != self._lateral:
+            self._lateral = me.lateral
+        steer, throttle = self._follower.act(
+            np.array([me.x, me.y]),
+            np.array(me.heading),
+            np.array(me.speed),
+            np.array(me.progress),
+            np.array(me.wear),
+            self._lateral,
+        )
+        return Action(float(steer), float(throttle))

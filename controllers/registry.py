@@ -1,102 +1,161 @@
 """The one closed registry of controllers. A request names a controller; it never names a Python path.
 
-The CLI, the server and tournaments all build drivers through :func:`make_controller`.
+The CLI, the server and tournaments all build drivers through this module. Each :class:`ControllerSpec`
+carries the controller's parameter dataclass, and its published parameters (names, types, defaults, units,
+bounds) are derived from that dataclass's fields (:mod:`controllers.parameters`), so the API documentation
+cannot drift from the code.
+
+Building a driver
+    ``make_controller(name)`` builds one with its defaults; ``make_controller(name, iterations=500)``
+    overrides parameters. An unknown name raises ``KeyError`` naming the known ones; an unknown parameter, a
+    value of the wrong type or one out of bounds raises :class:`~controllers.parameters.ParameterError` (a
+    ``ValueError``) naming the controller and the parameter.
+
+For the server (validate a request once, build later, possibly in another process)
+    ``params = validate_parameters(name, request_parameters)`` checks a request's ``{name: value}`` mapping
+    and returns the controller's parameter dataclass instance (``None`` for a controller without parameters);
+    a :class:`~controllers.parameters.ParameterError` there is the request's fault (HTTP 422), its ``str`` the
+    detail. ``controller_factory(name, params)`` then gives a zero-argument, picklable factory for the
+    controller hosts and planner workers (``spec.factory`` is the one with the defaults). A server with a
+    catalogue of its own (tests add faulty controllers) calls the same methods on the spec:
+    ``spec.validate(request_parameters)`` and ``spec.factory_for(params)``. ``spec.parameter_list`` is the
+    documented list (:class:`~controllers.parameters.Parameter`); ``spec.parameters`` the defaults as text.
+
+Adding a controller
+    1. Write the driver (the :class:`~controllers.base.Controller` Protocol: ``name``, ``rate_hz``,
+       ``reset(context)``, ``act(observation)``), or compose one from parts with
+       :class:`~controllers.hierarchical.HierarchicalController` (a :class:`~controllers.base.HighLevelPlanner`
+       and a :class:`~controllers.base.Tracker`; the server then plans it off the tick through the
+       :class:`~controllers.base.PlanningDriver` capability, with no server change).
+    2. Put its public parameters in a frozen dataclass of ``int``/``float``/``bool``/``str`` fields with
+       defaults, declared with :func:`~controllers.parameters.parameter` for a description, unit and bounds.
+    3. Write a module-level ``build(params) -> Controller`` (module level: the server pickles it to worker
+       processes) and add ``_spec(name, description, build, ParamsType)`` to ``_SPECS``. Its name must be
+       new; the defaults must give the controller as tuned (a race with defaults is the reference).
+    4. ``tests/test_registry.py`` then checks it resets and acts within budget on three tracks; the
+       server lists it at ``/api/controllers``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
+from functools import partial
 from types import MappingProxyType
+from typing import Any, Generic, TypeVar
 
-import numpy as np
+from controllers.base import Controller
+from controllers.fixed_line import FixedLinePlanner
+from controllers.hierarchical import HierarchicalController
+from controllers.lane_follower import LaneFollowerController, LaneFollowerParams
+from controllers.lq.tracker import FIXED_LINE_TRACKING, MCTS_TRACKING, LQNGTracker
+from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
+from controllers.tactical.game import GameParams
+from controllers.tactical.high_level import MCTSPlanner
 
-from controllers.base import Action, Controller, RaceContext
-from controllers.hierarchical import FixedLinePlanner, HierarchicalController, MCTSPlanner
-from controllers.lane_follower import LaneFollower
-from controllers.lq.tracker import LQNGParams, LQNGTracker, LQNGWeights
-from sim_core.observation import Observation
-from sim_core.params import SIM_HZ
-
-
-class LaneFollowerController:
-    """The pure-pursuit baseline as a registered driver: it follows the lane it started in."""
-
-    name = "lane-follower"
-    rate_hz = float(SIM_HZ)
-
-    def __init__(self) -> None:
-        self._follower: LaneFollower | None = None
-        self._lateral = 0.0
-
-    def reset(self, context: RaceContext) -> None:
-        """Pick the start lane's offset to follow."""
-        self._follower = LaneFollower(context.track, context.kart)
-        self._lateral = float("nan")
-
-    def act(self, observation: Observation) -> Action:
-        """Pure pursuit on its lane with a curvature-limited speed."""
-        assert self._follower is not None, "reset() first"
-        me = observation.me
-        if self._lateral != self._lateral:
-            self._lateral = me.lateral
-        steer, throttle = self._follower.act(
-            np.array([me.x, me.y]),
-            np.array(me.heading),
-            np.array(me.speed),
-            np.array(me.progress),
-            np.array(me.wear),
-            self._lateral,
-        )
-        return Action(float(steer), float(throttle))
+P = TypeVar("P")
 
 
 @dataclass(frozen=True)
-class ControllerSpec:
-    """A registered controller: its name, what it is, its parameters, and how to build one."""
+class ControllerSpec(Generic[P]):
+    """A registered controller: its name, what it is, how to build one, and its parameter dataclass."""
 
     name: str
     description: str
-    factory: Callable[[], Controller]
-    parameters: Mapping[str, str] = field(default_factory=dict)
+    factory: Callable[[], Controller]  # a driver with the default parameters
+    params_type: type[P] | None = None  # frozen dataclass of the public parameters (None: it has none)
+    build: Callable[[P], Controller] | None = None  # a driver from a ``params_type`` instance
+
+    @property
+    def parameter_list(self) -> tuple[Parameter, ...]:
+        """The public parameters, derived from ``params_type``."""
+        return () if self.params_type is None else parameters_of(self.params_type)
+
+    @property
+    def parameters(self) -> Mapping[str, str]:
+        """Each public parameter's default as text (what ``/api/controllers`` lists)."""
+        return {p.name: str(p.default) for p in self.parameter_list}
+
+    def validate(self, overrides: Mapping[str, object]) -> P | None:
+        """The parameters with ``overrides`` applied to the defaults; :class:`ParameterError` on a bad one."""
+        if self.params_type is None:
+            if overrides:
+                raise ParameterError(self.name, next(iter(overrides)), "is unknown (known: none)")
+            return None
+        return with_overrides(self.name, self.params_type, overrides)
+
+    def factory_for(self, params: P | None) -> Callable[[], Controller]:
+        """A zero-argument factory of drivers with ``params`` (from :meth:`validate`); picklable when ``build``
+        is a module-level function."""
+        if params is None or self.build is None:
+            return self.factory
+        return partial(self.build, params)
 
 
-def _mcts_lqng() -> Controller:
-    # the game's speed bins are coarse: planned speeds are a ceiling 3 m/s above the bin, the line's profile binds
-    return HierarchicalController("mcts-lqng", MCTSPlanner(), LQNGTracker(LQNGParams(speed_margin=3.0)))
+def _spec(name: str, description: str, build: Callable[[P], Controller], params_type: type[P]) -> ControllerSpec[P]:
+    return ControllerSpec(name, description, partial(build, params_type()), params_type, build)
 
 
-def _fixed_lqng() -> Controller:
-    fixed = LQNGParams(traffic_lane_tolerance=1.25, weights=LQNGWeights(heading=1.9, deny=0.1, avoid_scale=0.45))
-    return HierarchicalController("fixed-lqng", FixedLinePlanner(), LQNGTracker(fixed))
+@dataclass(frozen=True)
+class MCTSLQNGParams:
+    """Public parameters of ``mcts-lqng``."""
+
+    # at the maximum a plan takes ~0.4 s (2 karts) and the reused search tree, 8 plans' budgets, ~75 MB
+    iterations: int = parameter(2000, "MCTS iterations per plan", minimum=1, maximum=20_000)
+    horizon: int = parameter(8, "checkpoints the tactical game looks ahead", minimum=1, maximum=16)
+    planner_rate_hz: float = parameter(1.0, "re-plans per second", unit="Hz", minimum=0.1, maximum=10.0)
+    lqng_horizon_steps: int = parameter(4, "steps of 0.02 s the LQ game looks ahead", minimum=1, maximum=25)
 
 
-_SPECS = (
-    ControllerSpec(
+@dataclass(frozen=True)
+class FixedLQNGParams:
+    """Public parameters of ``fixed-lqng``."""
+
+    line_margin_m: float = parameter(
+        1.0, "how far the planner's racing line keeps inside the walls", unit="m", minimum=0.5, maximum=3.0
+    )
+    lqng_horizon_steps: int = parameter(4, "steps of 0.02 s the LQ game looks ahead", minimum=1, maximum=25)
+
+
+def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
+    game = GameParams(horizon=params.horizon)
+    planner = MCTSPlanner(iterations=params.iterations, rate_hz=params.planner_rate_hz, params=game)
+    tracker = LQNGTracker(replace(MCTS_TRACKING, horizon=params.lqng_horizon_steps))
+    return HierarchicalController("mcts-lqng", planner, tracker)
+
+
+def _fixed_lqng(params: FixedLQNGParams) -> Controller:
+    planner = FixedLinePlanner(margin=params.line_margin_m)
+    tracker = LQNGTracker(replace(FIXED_LINE_TRACKING, horizon=params.lqng_horizon_steps))
+    return HierarchicalController("fixed-lqng", planner, tracker)
+
+
+_SPECS: tuple[ControllerSpec[Any], ...] = (
+    _spec(
         "mcts-lqng",
         "MCTS tactical planner (1 Hz, 2,000 iterations, horizon 8) tracked by the LQ Nash game tracker (50 Hz).",
         _mcts_lqng,
-        {"planner_rate_hz": "1.0", "iterations": "2000", "horizon": "8", "lqng_horizon_steps": "4"},
+        MCTSLQNGParams,
     ),
-    ControllerSpec(
+    _spec(
         "fixed-lqng",
         "The offline optimised racing line tracked by the LQ Nash game tracker (50 Hz).",
         _fixed_lqng,
-        {"line_margin_m": "1.0", "lqng_horizon_steps": "4"},
+        FixedLQNGParams,
     ),
-    ControllerSpec(
+    _spec(
         "lane-follower",
         "Pure pursuit on its start lane with a curvature-limited speed profile (a simple baseline).",
         LaneFollowerController,
-        {},
+        LaneFollowerParams,
     ),
 )
 
-_BY_NAME: dict[str, ControllerSpec] = {spec.name: spec for spec in _SPECS}
-REGISTRY: Mapping[str, ControllerSpec] = MappingProxyType(_BY_NAME)
+_BY_NAME: dict[str, ControllerSpec[Any]] = {spec.name: spec for spec in _SPECS}
+REGISTRY: Mapping[str, ControllerSpec[Any]] = MappingProxyType(_BY_NAME)
 
 
-def register(spec: ControllerSpec) -> None:
+def register(spec: ControllerSpec[Any]) -> None:
     """Add a controller under ``spec.name`` in this process (a plug-in, an example, a test driver).
 
     Requests still name controllers, never Python paths: only code that runs here can register one. A live
@@ -113,10 +172,31 @@ def controller_names() -> list[str]:
     return sorted(REGISTRY)
 
 
-def make_controller(name: str) -> Controller:
-    """A new controller by registered name; ``KeyError`` names the known ones."""
+def controller_spec(name: str) -> ControllerSpec[Any]:
+    """The spec of a registered controller; ``KeyError`` names the known ones."""
     try:
-        spec = REGISTRY[name]
+        return REGISTRY[name]
     except KeyError:
         raise KeyError(f"unknown controller {name!r}; known: {controller_names()}") from None
-    return spec.factory()
+
+
+def validate_parameters(name: str, overrides: Mapping[str, object]) -> Any:
+    """The parameter dataclass instance of controller ``name`` with ``overrides`` applied (``None`` for a
+    controller without parameters). ``KeyError`` for an unknown controller, :class:`ParameterError` (a
+    ``ValueError``) naming the unknown, mistyped or out-of-bounds parameter."""
+    return controller_spec(name).validate(overrides)
+
+
+def controller_factory(name: str, params: Any = None) -> Callable[[], Controller]:
+    """A zero-argument, picklable factory of controller ``name`` with ``params`` (from
+    :func:`validate_parameters`; ``None``: the defaults)."""
+    return controller_spec(name).factory_for(params)
+
+
+def make_controller(name: str, **overrides: object) -> Controller:
+    """A new controller by registered name, with ``overrides`` of its public parameters.
+
+    ``KeyError`` names the known controllers; :class:`ParameterError` the offending parameter.
+    """
+    spec = controller_spec(name)
+    return spec.factory_for(spec.validate(overrides))()

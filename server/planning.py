@@ -83,7 +83,7 @@ def _worker_close(keys: tuple[str, ...]) -> None:
 
 def _worker_warm() -> float:
     """Plan once on the oval with a small budget so every compiled kernel is loaded; returns seconds."""
-    from controllers.hierarchical import MCTSPlanner
+    from controllers.tactical.high_level import MCTSPlanner
     from sim_core.observation import observe
     from sim_core.params import SimParams
     from sim_core.track_io import get_track

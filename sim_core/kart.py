@@ -180,7 +180,8 @@ def kart_step(
         k = 2.0 * new_speed * dt / wheelbase
         course_from_yaw = k * math.sin(slip)
         gain = 1.0 + k * math.cos(slip)
-        budget = a_lat / v_abs * dt
+        # at the step's mean speed: the course change is driven between the old and the new speed
+        budget = a_lat / max(0.5 * (abs(speed) + v_abs), 1e-6) * dt
         low = slip + (-budget - course_from_yaw) / gain
         high = slip + (budget - course_from_yaw) / gain
         new_slip = min(max(min(max(slip_target, low), high), -slip_limit), slip_limit)
@@ -198,7 +199,9 @@ def kart_step(
     else:
         slip = slip_target
         yaw_rate = 0.0
-    course = heading + 0.5 * yaw_rate * dt + slip
+    # the step's direction of travel is the end heading plus the end slip: consecutive courses then differ by
+    # exactly the (budgeted) yaw and slip changes of the step
+    course = heading + yaw_rate * dt + slip
     x += new_speed * math.cos(course) * dt
     y += new_speed * math.sin(course) * dt
     wrapped = heading + yaw_rate * dt + math.pi

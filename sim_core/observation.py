@@ -27,7 +27,7 @@ class KartView:
     wear: float  # [-]
     checkpoints_passed: int  # absolute count since the start
     lane: int  # lane at the last crossing (1-based)
-    lane_changes: int  # eq. (9) counter
+    lane_changes: int  # eq. (10) counter sampled at checkpoint crossings
     crossing_time: float  # [s] race time of the last crossing
     crossing_speed: float  # [m/s]
     crossing_wear: float  # [-]

@@ -140,8 +140,8 @@ class RuleParams:
     fault_cooldown: float = 1.5  # [s] contact (kart or wall) within this time of the last one is the same one
     contact_margin: float = 0.02  # [m] bodies closer than this are in contact
     fault_cone_cos: float = 0.5  # [-] front touches if the contact normal is within acos(0.5) = 60 deg of heading
-    buffer_side: float = 0.5  # [m] s0: minimum nose-to-body distance when not directly behind (eq. 7-8)
-    buffer_behind: float = 1.5  # [m] s1: minimum nose-to-body distance when directly behind (eq. 7-8)
+    buffer_side: float = 0.5  # [m] s0: minimum nose-to-body distance when not directly behind (eqs. (8)-(9))
+    buffer_behind: float = 1.5  # [m] s1: minimum nose-to-body distance when directly behind (eqs. (8)-(9))
     behind_lateral_overlap: float = 1.2  # [m] "directly behind" when lateral offsets differ by less than this
     # Lane changes: "per_step" counts them as they happen (the paper's eqs. (10)-(11)); "checkpoint" samples
     # the lane at checkpoint crossings only (the original implementation, behind the paper's tables).

@@ -10,14 +10,17 @@ from numba import njit
 def lane_change_update(
     count: int, previous_lane: int, lane: int, driven_straight: bool, next_straight: bool, limit: int
 ) -> tuple[int, bool]:
-    """One checkpoint crossing of the lane-change rule: returns (new counter, illegal).
+    """One update of the lane-change rule: returns (new counter, illegal).
 
-    eq. (9), with the original implementation's semantics: the counter adds the number of lanes crossed
-    (``|lane - previous_lane|``) since the previous checkpoint and resets to 0 whenever the road type
-    changes (the section just driven is straight and the next one a curve, or the reverse). A change is
-    illegal (eq. 10) when it was made on a straight (``driven_straight``) and takes the counter past
-    ``limit`` (L). Unlike the original, a crossing without a lane change is never illegal (the original
+    eq. (10) gen_lane_var: the counter adds the number of lanes crossed (``|lane - previous_lane|``) and resets
+    to 0 whenever the road type changes (the stretch just driven is straight and the next one a curve, or the
+    reverse); eq. (11) gen_lane_lim: a change is illegal when it was made on a straight (``driven_straight``)
+    and takes the counter past ``limit`` (L). A step without a lane change is never illegal (the original
     charged again at every checkpoint while the counter stayed above L).
+
+    The referee calls it every step with the lane the kart is in (lane membership with hysteresis), which is
+    the paper's rule, and also at every checkpoint crossing with the lane there, which is the original
+    implementation's sampling (behind the paper's tables); the discrete game calls it per checkpoint.
     """
     crossed = abs(lane - previous_lane)
     illegal = driven_straight and crossed > 0 and count + crossed > limit
@@ -40,5 +43,6 @@ def front_touches(contact_param: float, toward_other_dot_heading: float, cone_co
 
 @njit(cache=True, inline="always")
 def required_buffer(directly_behind: bool, buffer_side: float, buffer_behind: float) -> float:
-    """eqs. (7)-(8): the nose-to-body distance a kart must keep: s1 when directly behind the other, else s0."""
+    """eqs. (8)-(9) gen_coll_avoid: the nose-to-body distance a kart must keep: s1 when directly behind the
+    other, else s0."""
     return buffer_behind if directly_behind else buffer_side

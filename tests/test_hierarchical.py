@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as hs
 
 from controllers.base import RaceContext
-from controllers.hierarchical import INTERACTION_WINDOW, MCTSPlanner, _lanes_legal
 from controllers.plan import Plan, Waypoint
+from controllers.tactical.high_level import INTERACTION_WINDOW, MCTSPlanner, _lanes_legal
 from sim_core.observation import observe
 from sim_core.params import PAPER_KART, SimParams
 from sim_core.track_io import get_track

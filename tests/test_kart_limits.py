@@ -26,14 +26,18 @@ TOLERANCE = 1.03  # the issue's allowance for finite differences
 
 
 def lateral_accelerations(xy: np.ndarray, window: int = WINDOW) -> np.ndarray:
-    """|lateral acceleration| [m/s^2] of a path sampled every DT, averaged over ``window`` steps; entry i uses
-    positions i .. i + window + 1 (no project kinematics: positions only)."""
+    """|lateral acceleration| [m/s^2] of a path sampled every DT, from positions only: per step, the turn of the
+    finite-difference velocity times the speed (``|v1 x v2| / (|v1 + v2| / 2) / dt``), averaged over ``window``
+    steps. (Differencing the velocity across the whole window instead would charge a turn made while braking
+    at the speed before the braking.)"""
     v = np.diff(xy, axis=0) / DT
-    dv = (v[window:] - v[:-window]) / (window * DT)
-    mean_v = 0.5 * (v[window:] + v[:-window])
-    speed = np.linalg.norm(mean_v, axis=1)
-    cross = mean_v[:, 0] * dv[:, 1] - mean_v[:, 1] * dv[:, 0]
-    return np.where(speed > 0.5, np.abs(cross) / np.maximum(speed, 1e-9), 0.0)
+    v1, v2 = v[:-1], v[1:]
+    mean_speed = 0.5 * np.linalg.norm(v1 + v2, axis=1)
+    cross = v1[:, 0] * v2[:, 1] - v1[:, 1] * v2[:, 0]
+    per_step = np.where(mean_speed > 0.5, cross / np.maximum(mean_speed, 1e-9) / DT, 0.0)
+    if len(per_step) < window:
+        return np.zeros(0)
+    return np.abs(np.convolve(per_step, np.ones(window) / window, "valid"))
 
 
 def run(world: World, actions: np.ndarray) -> dict[str, np.ndarray]:

@@ -13,7 +13,7 @@ from sim_core.world import World
 
 
 def reference_lane_counter(lanes: list[int], straight: list[bool], limit: int) -> tuple[list[int], list[bool]]:
-    """Counter and illegality after each crossing, written from eq. (9) with the original's semantics.
+    """Counter and illegality after each crossing, written from eq. (10) with the original's semantics.
 
     ``lanes[c]`` is the lane at crossing checkpoint c (c = 0 is the start), ``straight[c]`` whether the road
     from checkpoint c to c + 1 is straight. The counter after crossing c is the number of lanes crossed since

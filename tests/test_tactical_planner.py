@@ -6,12 +6,11 @@ import itertools
 
 import numpy as np
 import pytest
-from exact_game import optimal_first_moves
 from hypothesis import given, settings
 from hypothesis import strategies as hs
 
-from controllers.tactical import discrete as dg
-from controllers.tactical.game import GameParams, build_tables
+from controllers.tactical import rules
+from controllers.tactical.exact import optimal_first_moves, random_small_games
 from controllers.tactical.mcts import SearchTree
 from controllers.tactical.planner import DEFAULT_EXPLORATION, DEFAULT_GREEDY, PlayerState, TacticalPlanner
 from sim_core.params import PAPER_KART
@@ -19,26 +18,6 @@ from sim_core.rules import lane_change_update
 from sim_core.track_io import get_track
 
 TRACKS = {name: get_track(name) for name in ("oval", "complex")}
-
-
-def random_small_games(count: int, seed: int = 0) -> list[tuple[object, np.ndarray]]:
-    rng = np.random.default_rng(seed)
-    tables = [build_tables(TRACKS[n], PAPER_KART, GameParams(velocity_bin_width=2.0)) for n in ("oval", "complex")]
-    games = []
-    moves = np.empty(64, dtype=np.int64)
-    while len(games) < count:
-        tb = tables[len(games) % 2]
-        state = np.zeros((2, dg.N_FIELDS), dtype=np.int64)
-        state[:, dg.CHECKPOINT] = rng.integers(0, len(tb.straight))
-        state[:, dg.LANE] = rng.choice(4, 2, replace=False)
-        state[:, dg.BIN] = rng.integers(0, len(tb.bin_low), 2)
-        state[:, dg.TIME] = (0, rng.integers(0, 60))
-        state[:, dg.WEAR] = rng.integers(1000, 5000, 2)
-        state[:, dg.LANE_COUNT] = rng.integers(0, 3, 2)
-        mover = dg.next_player(state, int(state[0, dg.CHECKPOINT]))
-        if dg.legal_moves(tb, state, mover, moves) >= 2:
-            games.append((tb, state))
-    return games
 
 
 def test_large_budget_finds_the_exact_best_first_move() -> None:
@@ -84,8 +63,8 @@ def test_plans_never_break_a_rule(seed: int, track_name: str, n_players: int) ->
     n = track.n_checkpoints
     arrivals: dict[tuple[int, int], list[float]] = {}
     for row, kart in enumerate(karts):
-        lane, count, wear = int(root[row, dg.LANE]) + 1, int(root[row, dg.LANE_COUNT]), int(root[row, dg.WEAR])
-        checkpoint = int(root[row, dg.CHECKPOINT])
+        lane, count, wear = int(root[row, rules.LANE]) + 1, int(root[row, rules.LANE_COUNT]), int(root[row, rules.WEAR])
+        checkpoint = int(root[row, rules.CHECKPOINT])
         for wp in plan.waypoints[kart]:
             assert wp.checkpoint == checkpoint + 1
             c = checkpoint % n
@@ -93,10 +72,10 @@ def test_plans_never_break_a_rule(seed: int, track_name: str, n_players: int) ->
                 count, lane, wp.lane, bool(tb.straight[c]), bool(tb.straight[(c + 1) % n]), tb.lane_limit
             )
             assert not illegal, f"kart {kart} breaks the lane-change limit at checkpoint {wp.checkpoint}"
-            limit = dg.corner_speed(tb, tb.corner_radius[c, lane - 1, wp.lane - 1], wear)
+            limit = rules.corner_speed(tb, tb.corner_radius[c, lane - 1, wp.lane - 1], wear)
             low = wp.speed - (tb.bin_high[0] - tb.bin_low[0])
             assert low <= limit + 1e-9, f"kart {kart} plans {low} m/s into a {limit:.2f} m/s corner"
-            wear = dg.worn_after(tb, wear, tb.turn_angle[c])
+            wear = rules.worn_after(tb, wear, tb.turn_angle[c])
             arrivals.setdefault((wp.checkpoint, wp.lane), []).append(wp.time)
             lane, checkpoint = wp.lane, wp.checkpoint
     for times in arrivals.values():
@@ -133,9 +112,9 @@ def test_root_uses_the_real_speed_bin_and_the_section_window() -> None:
     players = [PlayerState(0, 30, 2, 12.4, 10.0, 0.25, 1), PlayerState(1, 31, 3, 9.0, 10.4, 0.3, 0), far]
     root, karts = planner.root_state(players, 0)
     assert karts == [0, 1]
-    assert root[0, dg.BIN] == 6  # 12.4 m/s lies in [12, 13)
-    assert (root[:, dg.CHECKPOINT] == 31).all()  # the kart behind is advanced to the leader's checkpoint
-    assert root[0, dg.LANE_COUNT] == 1
+    assert root[0, rules.BIN] == 6  # 12.4 m/s lies in [12, 13)
+    assert (root[:, rules.CHECKPOINT] == 31).all()  # the kart behind is advanced to the leader's checkpoint
+    assert root[0, rules.LANE_COUNT] == 1
     with pytest.raises(ValueError):
         planner.root_state(players, ego=5)
 

@@ -1,1 +1,2 @@
-"""Linear-quadratic games: the feedback Nash solver and the LQNG waypoint tracker (paper section 4.2.3)."""
+"""Linear-quadratic games (paper section 4.2.3): the feedback Nash solver (``nash``), the LQNG game's dynamics
+and cost terms (``game``) and the LQNG waypoint tracker with its tuned presets (``tracker``)."""

@@ -1,18 +1,22 @@
-"""The LQNG tracker (paper eqs. 15-19): a linear-quadratic Nash game over a few 0.02 s steps, re-solved at
-every simulation step, that tracks the next waypoint while denying the opponents theirs and keeping apart.
+"""The LQNG tracker (paper section 4.2.3, eqs. (20)-(24)): a linear-quadratic Nash game over a few 0.02 s
+steps, re-solved at every simulation step, that tracks the next waypoint while denying the opponents theirs
+and keeping apart.
 
-Each player's state is (x, y, v, dtheta) with dtheta the heading change from its current heading, so the
-dynamics linearised at the current state (eq. 19) are exact in their affine part: x' = x + dt (cos th0 v -
-v0 sin th0 dtheta), y' likewise, v' = v + dt a, dtheta' = dtheta + dt omega. Costs of player i (1/2 x'Qx + q'x):
+This module picks each player's targets (aim point, speed) and the weights; :mod:`controllers.lq.game` turns
+them into the game (dynamics linearised at the current state, eq. (24) lqng_dyn) and
+:mod:`controllers.lq.nash` solves it. Costs of player i (1/2 x'Qx + q'x), assembled as eq. (23) lqng_obj:
 
-* eq. (15), own waypoint: w_pos |p_i - psi_i|^2 + w_v (v_i - psi_v)^2 + w_theta (dtheta_i - psi_theta)^2;
-* eq. (16), denial: - w_deny |p_j - psi_j|^2 for each opponent j with a predicted waypoint within reach;
-* eq. (17), separation: - w_avoid |p_i - p_j|^2 for each kart within ``avoid_radius``;
-* controls: 1/2 r |u_i|^2.
+* eq. (20) lqng_obj1, own waypoint: w_pos |p_i - psi_i|^2 + w_v (v_i - psi_v)^2 + w_theta (dtheta_i - psi_theta)^2;
+* eq. (21) lqng_obj2, denial: - w_deny |p_j - psi_j|^2 for each opponent j with a predicted waypoint within reach;
+* eq. (22) lqng_obj3, separation: - w_avoid |p_i - p_j|^2 for each kart within ``avoid_radius``;
+* controls: 1/2 r |u_i|^2 (not in eq. (23)).
 
 The heading target points at a pure-pursuit aim point on the path that blends the kart's lateral offset
 into the next waypoints' lanes along the track (a heading straight at a lane point would cut the inside of
 bends). The tracker's acceleration and yaw rate are mapped to throttle and steer.
+
+The two registered hierarchical drivers track with the named presets :data:`MCTS_TRACKING` and
+:data:`FIXED_LINE_TRACKING`.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controllers.base import Action, RaceContext
+from controllers.lq.game import STATE_SIZE, add_denial_cost, add_separation_cost, add_waypoint_cost, linearised_dynamics
 from controllers.lq.nash import feedback_nash
 from controllers.plan import Plan, Waypoint
 from controllers.racing_line import RacingLine, optimise_racing_line
@@ -66,6 +71,16 @@ class LQNGParams:
     # planned into neighbouring lanes would both close onto the line and touch
     traffic_lane_tolerance: float = 0.0
     weights: LQNGWeights = LQNGWeights()
+
+
+# ``mcts-lqng``: the game's speed bins are coarse, so planned speeds are a ceiling 3 m/s above the bin and the
+# racing line's speed profile binds
+MCTS_TRACKING = LQNGParams(speed_margin=3.0)
+# ``fixed-lqng``: the original's heading weight and avoidance scale with the fixed line (1.9, 0.45), a stronger
+# denial, and the line's own lanes followed to within ``lane_tolerance`` in traffic as well
+FIXED_LINE_TRACKING = LQNGParams(
+    traffic_lane_tolerance=1.25, weights=LQNGWeights(heading=1.9, deny=0.1, avoid_scale=0.45)
+)
 
 
 class LQNGTracker:
@@ -147,59 +162,18 @@ class LQNGTracker:
         others = [k for k in observation.others() if math.hypot(k.x - me.x, k.y - me.y) < w.avoid_radius]
         players = [me, *others]
         tolerance = self.params.traffic_lane_tolerance if others else self.params.lane_tolerance
-        n = 4 * len(players)
-        A = np.eye(n)
-        B: list[np.ndarray] = []
-        x0 = np.zeros(n)
+        A, B = linearised_dynamics(players, DT)
+        x0 = np.zeros(STATE_SIZE * len(players))
         targets = []
         for i, k in enumerate(players):
-            s = 4 * i
-            c, sn = math.cos(k.heading), math.sin(k.heading)
-            A[s, s + 2], A[s, s + 3] = c * DT, -k.speed * sn * DT
-            A[s + 1, s + 2], A[s + 1, s + 3] = sn * DT, k.speed * c * DT
-            Bi = np.zeros((n, 2))
-            Bi[s + 2, 0] = Bi[s + 3, 1] = DT
-            B.append(Bi)
             # positions relative to the ego kart keep the numbers small
-            x0[s : s + 3] = (k.x - me.x, k.y - me.y, k.speed)
+            x0[STATE_SIZE * i : STATE_SIZE * i + 3] = (k.x - me.x, k.y - me.y, k.speed)
             first, second = self._upcoming(track, k, plan, k.index)
             ax, ay = self._aim(track, k, first, second, tolerance)
             heading_error = math.remainder(math.atan2(ay - k.y, ax - k.x) - k.heading, 2.0 * math.pi)
             speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
             targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))
-        Q = [np.zeros((n, n)) for _ in players]
-        q = [np.zeros(n) for _ in players]
-        for i, k in enumerate(players):
-            s = 4 * i
-            tx, ty, tv, th = targets[i]
-            w_pos = w.position / max(1.0, k.speed)
-            for idx, weight, target in (
-                (s, w_pos, tx),
-                (s + 1, w_pos, ty),
-                (s + 2, w.speed, tv),
-                (s + 3, w.heading, th),
-            ):
-                Q[i][idx, idx] += 2.0 * weight
-                q[i][idx] -= 2.0 * weight * target
-            scale = w.avoid_scale if i == 0 else w.opponent_avoid_scale
-            for j, other in enumerate(players):
-                if j == i:
-                    continue
-                o = 4 * j
-                dist = max(math.hypot(other.x - k.x, other.y - k.y), 0.5)
-                w_avoid = 1.0 / (dist**1.5 * scale)
-                for axis in (0, 1):
-                    a, b = s + axis, o + axis
-                    Q[i][a, a] -= 2.0 * w_avoid
-                    Q[i][b, b] -= 2.0 * w_avoid
-                    Q[i][a, b] += 2.0 * w_avoid
-                    Q[i][b, a] += 2.0 * w_avoid
-                if i == 0 and plan is not None and other.index in plan.waypoints:
-                    w_deny = w.deny / max(1.0, me.speed)
-                    ox, oy = targets[j][0], targets[j][1]
-                    for idx, target in ((o, ox), (o + 1, oy)):
-                        Q[i][idx, idx] -= 2.0 * w_deny
-                        q[i][idx] += 2.0 * w_deny * target
+        Q, q = self._costs(players, targets, plan)
         R = [w.control * np.eye(2) for _ in players]
         P, alpha = feedback_nash(A, B, Q, q, R, self.params.horizon)
         accel, yaw_rate = -(P[0][0:2] @ x0) - alpha[0][0:2]
@@ -207,3 +181,26 @@ class LQNGTracker:
         speed = max(abs(me.speed), 1.0)
         steer = math.atan(yaw_rate * kart.wheelbase / speed) / kart.max_steer_angle
         return Action(float(np.clip(steer, -1.0, 1.0)), float(np.clip(throttle, -1.0, 1.0)))
+
+    def _costs(
+        self, players: list[KartView], targets: list[tuple[float, float, float, float]], plan: Plan | None
+    ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+        """Every player's (Q_i, q_i), eq. (23) lqng_obj: its waypoint (20) paid, the separation from each other
+        player (22) earned, and for the ego alone the denial (21) of each opponent's predicted waypoint. The
+        opponents are assumed to play the same game with their own avoidance scale and no denial."""
+        w = self.params.weights
+        me = players[0]
+        n = STATE_SIZE * len(players)
+        Q = [np.zeros((n, n)) for _ in players]
+        q = [np.zeros(n) for _ in players]
+        for i, k in enumerate(players):
+            add_waypoint_cost(Q[i], q[i], i, targets[i], w.position / max(1.0, k.speed), w.speed, w.heading)
+            scale = w.avoid_scale if i == 0 else w.opponent_avoid_scale
+            for j, other in enumerate(players):
+                if j == i:
+                    continue
+                dist = max(math.hypot(other.x - k.x, other.y - k.y), 0.5)
+                add_separation_cost(Q[i], i, j, 1.0 / (dist**1.5 * scale))
+                if i == 0 and plan is not None and other.index in plan.waypoints:
+                    add_denial_cost(Q[i], q[i], j, targets[j][:2], w.deny / max(1.0, me.speed))
+        return Q, q

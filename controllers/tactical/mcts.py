@@ -13,8 +13,9 @@ import math
 import numpy as np
 from numba import njit
 
-from controllers.tactical import discrete as dg
+from controllers.tactical import rules
 from controllers.tactical.game import GameTables
+from controllers.tactical.value import terminal_values
 
 NO_NODE = -1
 REJECTION_TRIES = 8  # random legal move in rollouts: draws before falling back to listing every legal move
@@ -24,7 +25,7 @@ REJECTION_TRIES = 8  # random legal move in rollouts: draws before falling back 
 def _round_of(state: np.ndarray, start_round: int, final_round: int) -> int:
     """The checkpoint whose round is being played: the lowest checkpoint any player still stands on."""
     r = start_round
-    while r < final_round and dg.next_player(state, r) == dg.NO_PLAYER:
+    while r < final_round and rules.next_player(state, r) == rules.NO_PLAYER:
         r += 1
     return r
 
@@ -36,9 +37,9 @@ def _fastest_move(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins:
     for lane in range(n_lanes):
         # a higher arrival speed never arrives later, so the first legal bin from the top is this lane's fastest
         for vbin in range(bins - 1, -1, -1):
-            arrival, _, ok = dg.move_outcome(tb, state, p, lane, vbin)
+            arrival, _, ok = rules.move_outcome(tb, state, p, lane, vbin)
             if ok:
-                key = arrival * 8 + abs(lane - state[p, dg.LANE])
+                key = arrival * 8 + abs(lane - state[p, rules.LANE])
                 if key < best_key:
                     action, best_key = lane * bins + vbin, key
                 break
@@ -66,8 +67,8 @@ def _rollout(
     n_actions = n_lanes * bins
     r = _round_of(state, start_round, final_round)
     while r < final_round:
-        p = dg.next_player(state, r)
-        if p == dg.NO_PLAYER:
+        p = rules.next_player(state, r)
+        if p == rules.NO_PLAYER:
             r += 1
             continue
         action = -1
@@ -77,12 +78,12 @@ def _rollout(
             # rejection sampling is uniform over the legal moves and usually needs one or two draws
             for _ in range(REJECTION_TRIES):
                 candidate = np.random.randint(0, n_actions)
-                _, _, ok = dg.move_outcome(tb, state, p, candidate // bins, candidate % bins)
+                _, _, ok = rules.move_outcome(tb, state, p, candidate // bins, candidate % bins)
                 if ok:
                     action = candidate
                     break
             if action < 0:
-                count = dg.legal_moves(tb, state, p, moves)
+                count = rules.legal_moves(tb, state, p, moves)
                 if count > 0:
                     action = moves[np.random.randint(0, count)]
         if action < 0:
@@ -90,8 +91,8 @@ def _rollout(
                 values[q] = 1.0
             values[p] = 0.0
             return
-        dg.apply_move(tb, state, p, action)
-    dg.terminal_values(tb, state, reference, values)
+        rules.apply_move(tb, state, p, action)
+    terminal_values(tb, state, reference, values)
 
 
 @njit(cache=True)
@@ -106,14 +107,14 @@ def greedy_line(tb: GameTables, state: np.ndarray, round_cp: int, final_round: i
     count = 0
     r = _round_of(state, round_cp, final_round)
     while r < final_round:
-        p = dg.next_player(state, r)
-        if p == dg.NO_PLAYER:
+        p = rules.next_player(state, r)
+        if p == rules.NO_PLAYER:
             r += 1
             continue
         action = _fastest_move(tb, state, p, n_lanes, bins)
         if action < 0:
             return count
-        dg.apply_move(tb, state, p, action)
+        rules.apply_move(tb, state, p, action)
         out[count, 0] = p
         out[count, 1] = action
         count += 1
@@ -124,7 +125,7 @@ def greedy_line(tb: GameTables, state: np.ndarray, round_cp: int, final_round: i
 def reference_times(tb: GameTables, root_state: np.ndarray, horizon: int) -> np.ndarray:
     """Every player's time at the horizon when all play the fastest legal move (the pace reference)."""
     state = root_state.copy()
-    start = state[:, dg.CHECKPOINT].min()
+    start = state[:, rules.CHECKPOINT].min()
     moves = np.empty(tb.distance.shape[1] * tb.bin_low.shape[0], dtype=np.int64)
     dummy = np.zeros(state.shape[0])
     values = np.empty(state.shape[0])
@@ -132,7 +133,7 @@ def reference_times(tb: GameTables, root_state: np.ndarray, horizon: int) -> np.
     reference = np.empty(state.shape[0])
     for p in range(state.shape[0]):
         # a stuck greedy player keeps its last time; the reference then only ranks the others
-        reference[p] = state[p, dg.TIME]
+        reference[p] = state[p, rules.TIME]
     return reference
 
 
@@ -163,10 +164,10 @@ def _init_root(
     tree_value[0] = 0.0
     tree_first_child[0] = NO_NODE
     tree_next_sibling[0] = NO_NODE
-    tree_mover[0] = dg.next_player(root_state, tree_round[0]) if tree_round[0] < final_round else dg.NO_PLAYER
+    tree_mover[0] = rules.next_player(root_state, tree_round[0]) if tree_round[0] < final_round else rules.NO_PLAYER
     tree_untried_count[0] = 0
-    if tree_mover[0] != dg.NO_PLAYER:
-        tree_untried_count[0] = dg.legal_moves(tb, tree_state[0], tree_mover[0], tree_untried[0])
+    if tree_mover[0] != rules.NO_PLAYER:
+        tree_untried_count[0] = rules.legal_moves(tb, tree_state[0], tree_mover[0], tree_untried[0])
     return 1
 
 
@@ -200,7 +201,7 @@ def search(
     """
     np.random.seed(seed)
     players = root_state.shape[0]
-    start_round = root_state[:, dg.CHECKPOINT].min()
+    start_round = root_state[:, rules.CHECKPOINT].min()
     final_round = start_round + horizon
     moves = np.empty(tree_untried.shape[1], dtype=np.int64)
     values = np.empty(players)
@@ -230,7 +231,9 @@ def search(
     for _ in range(iterations):
         # ---- selection
         node = 0
-        while tree_mover[node] != dg.NO_PLAYER and tree_untried_count[node] == 0 and tree_first_child[node] != NO_NODE:
+        while (
+            tree_mover[node] != rules.NO_PLAYER and tree_untried_count[node] == 0 and tree_first_child[node] != NO_NODE
+        ):
             log_n = math.log(max(tree_visits[node], 1))
             best, best_score = NO_NODE, -1e300
             child = tree_first_child[node]
@@ -242,7 +245,7 @@ def search(
                 child = tree_next_sibling[child]
             node = best
         # ---- expansion
-        if tree_mover[node] != dg.NO_PLAYER and tree_untried_count[node] > 0:
+        if tree_mover[node] != rules.NO_PLAYER and tree_untried_count[node] > 0:
             k = np.random.randint(0, tree_untried_count[node])
             action = tree_untried[node, k]
             tree_untried_count[node] -= 1
@@ -250,7 +253,7 @@ def search(
             child = n_nodes
             n_nodes += 1
             tree_state[child] = tree_state[node]
-            dg.apply_move(tb, tree_state[child], tree_mover[node], action)
+            rules.apply_move(tb, tree_state[child], tree_mover[node], action)
             tree_parent[child] = node
             tree_action[child] = action
             tree_visits[child] = 0
@@ -260,16 +263,16 @@ def search(
             tree_first_child[node] = child
             tree_round[child] = _round_of(tree_state[child], tree_round[node], final_round)
             if tree_round[child] < final_round:
-                tree_mover[child] = dg.next_player(tree_state[child], tree_round[child])
-                tree_untried_count[child] = dg.legal_moves(
+                tree_mover[child] = rules.next_player(tree_state[child], tree_round[child])
+                tree_untried_count[child] = rules.legal_moves(
                     tb, tree_state[child], tree_mover[child], tree_untried[child]
                 )
             else:
-                tree_mover[child] = dg.NO_PLAYER
+                tree_mover[child] = rules.NO_PLAYER
                 tree_untried_count[child] = 0
             node = child
         # ---- simulation
-        if tree_mover[node] != dg.NO_PLAYER and tree_untried_count[node] == 0 and tree_first_child[node] == NO_NODE:
+        if tree_mover[node] != rules.NO_PLAYER and tree_untried_count[node] == 0 and tree_first_child[node] == NO_NODE:
             # the player to move is stuck
             for q in range(players):
                 values[q] = 1.0
@@ -292,7 +295,7 @@ class SearchTree:
 
     def __init__(self, capacity: int, players: int, max_actions: int) -> None:
         self.capacity = capacity
-        self.state = np.zeros((capacity, players, dg.N_FIELDS), dtype=np.int64)
+        self.state = np.zeros((capacity, players, rules.N_FIELDS), dtype=np.int64)
         self.parent = np.zeros(capacity, dtype=np.int64)
         self.action = np.zeros(capacity, dtype=np.int64)
         self.mover = np.zeros(capacity, dtype=np.int64)

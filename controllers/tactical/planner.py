@@ -10,8 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controllers.plan import Plan, Waypoint
-from controllers.tactical import discrete as dg
-from controllers.tactical.discrete import apply_move
+from controllers.tactical import rules
 from controllers.tactical.game import TIME_UNITS_PER_S, WEAR_UNITS, GameParams, GameTables, build_tables
 from controllers.tactical.mcts import SearchTree, greedy_line
 from sim_core.params import KartParams
@@ -19,7 +18,6 @@ from sim_core.track import Track
 
 DEFAULT_EXPLORATION = 0.2  # UCT constant (values in [0, 1], value_scale 1 s): best measured on exact small games
 DEFAULT_GREEDY = 0.8  # probability that a rollout move is the fastest legal one
-WALL_CLOCK_CHUNK = 250  # iterations between wall-clock checks when a time cap is set
 TREE_CAPACITY_PLANS = 8  # a reused tree grows for up to this many plans' budgets before it starts afresh
 PLAN_MIN_VISITS = 30  # a plan follows the search tree only through choices visited at least this often
 
@@ -34,7 +32,7 @@ class PlayerState:
     speed: float  # [m/s] speed at that crossing
     time: float  # [s] race time of that crossing
     wear: float  # [-] tyre wear at that crossing
-    lane_changes: int  # the referee's eq. (9) counter
+    lane_changes: int  # the referee's eq. (10) gen_lane_var counter
 
 
 class TacticalPlanner:
@@ -54,7 +52,6 @@ class TacticalPlanner:
         seed: int = 0,
         exploration: float = DEFAULT_EXPLORATION,
         greedy: float = DEFAULT_GREEDY,
-        max_seconds: float | None = None,
         lane_limit: int | None = None,
     ) -> None:
         self.track = track
@@ -64,7 +61,6 @@ class TacticalPlanner:
         self.seed = seed
         self.exploration = exploration
         self.greedy = greedy
-        self.max_seconds = max_seconds
         self._plans = 0
         self._tree: SearchTree | None = None
         self._tree_root: np.ndarray | None = None
@@ -95,7 +91,7 @@ class TacticalPlanner:
         chosen = [me] + [p for p in players if p.kart != ego and abs(p.checkpoint - me.checkpoint) < window]
         leader_cp = max(p.checkpoint for p in chosen)
         n = self.track.n_checkpoints
-        state = np.zeros((len(chosen), dg.N_FIELDS), dtype=np.int64)
+        state = np.zeros((len(chosen), rules.N_FIELDS), dtype=np.int64)
         times = []
         for row, p in enumerate(chosen):
             t = p.time
@@ -103,15 +99,15 @@ class TacticalPlanner:
                 lane = p.lane - 1
                 t += self.tables.distance[c % n, lane, lane] / max(p.speed, 1.0)
             times.append(t)
-            state[row, dg.CHECKPOINT] = leader_cp
-            state[row, dg.LANE] = p.lane - 1
-            state[row, dg.PREV_LANE] = p.lane - 1
-            state[row, dg.BIN] = self.speed_bin(p.speed)
-            state[row, dg.WEAR] = round(min(max(p.wear, 0.0), 1.0) * WEAR_UNITS)
-            state[row, dg.LANE_COUNT] = p.lane_changes
+            state[row, rules.CHECKPOINT] = leader_cp
+            state[row, rules.LANE] = p.lane - 1
+            state[row, rules.PREV_LANE] = p.lane - 1
+            state[row, rules.BIN] = self.speed_bin(p.speed)
+            state[row, rules.WEAR] = round(min(max(p.wear, 0.0), 1.0) * WEAR_UNITS)
+            state[row, rules.LANE_COUNT] = p.lane_changes
         earliest = min(times)
         for row, t in enumerate(times):
-            state[row, dg.TIME] = round((t - earliest) * TIME_UNITS_PER_S)
+            state[row, rules.TIME] = round((t - earliest) * TIME_UNITS_PER_S)
         return state, [p.kart for p in chosen]
 
     # ------------------------------------------------------------------ search
@@ -133,18 +129,10 @@ class TacticalPlanner:
         seed = self.seed * 1_000_003 + self._plans
         self._plans += 1
         t0 = time.perf_counter()
-        if self.max_seconds is None:
-            tree.run(tb, root, horizon, budget, seed, self.exploration, self.greedy, resume=reuse)
-            done = budget
-        else:
-            done = 0
-            while done < budget and (done == 0 or time.perf_counter() - t0 < self.max_seconds):
-                chunk = min(WALL_CLOCK_CHUNK, budget - done)
-                tree.run(tb, root, horizon, chunk, seed + done, self.exploration, self.greedy, resume=reuse or done > 0)
-                done += chunk
+        tree.run(tb, root, horizon, budget, seed, self.exploration, self.greedy, resume=reuse)
         seconds = time.perf_counter() - t0
         self._tree_root = root.copy()
-        return self._extract(tree, karts, ego, int(root[0, dg.CHECKPOINT]), done, seconds)
+        return self._extract(tree, karts, ego, int(root[0, rules.CHECKPOINT]), budget, seconds)
 
     def _extract(
         self, tree: SearchTree, karts: list[int], ego: int, root_cp: int, iterations: int, seconds: float
@@ -160,12 +148,12 @@ class TacticalPlanner:
         played = greedy_line(tb, state, int(tree.round[path[-1]]), root_cp + self.params.horizon, tail)
         replay = tree.state[path[-1]].copy()
         for mover, action in tail[:played]:
-            apply_move(tb, replay, int(mover), int(action))
+            rules.apply_move(tb, replay, int(mover), int(action))
             moves.append((int(mover), int(action), replay.copy()))
         for mover, action, states in moves:
             lane, vbin = divmod(action, bins)
             state = states[mover]
-            checkpoint = int(state[dg.CHECKPOINT])
+            checkpoint = int(state[rules.CHECKPOINT])
             point = self.track.lane_point(checkpoint, lane + 1)
             per_player[karts[mover]].append(
                 Waypoint(
@@ -173,7 +161,7 @@ class TacticalPlanner:
                     lane=lane + 1,
                     position=(float(point[0]), float(point[1])),
                     speed=float(tb.bin_high[vbin]),
-                    time=float(state[dg.TIME]) / TIME_UNITS_PER_S,
+                    time=float(state[rules.TIME]) / TIME_UNITS_PER_S,
                 )
             )
         return Plan(ego, root_cp, {k: tuple(w) for k, w in per_player.items()}, iterations, tree.size, seconds)

@@ -1,5 +1,5 @@
-"""Compiled rules of the discrete racing game: whose turn it is, which moves are legal, what they lead to,
-and the value of a finished game.
+"""Compiled rules of the discrete racing game: whose turn it is, which moves are legal and what they lead to
+(the value of a finished game is :mod:`controllers.tactical.value`).
 
 A game state is an int64 array of shape (players, N_FIELDS) plus the index of the last completed round.
 Players move one checkpoint per round; within a round the player that reached the checkpoint first (the
@@ -24,7 +24,7 @@ LANE = 1  # 0-based lane
 BIN = 2  # velocity bin
 TIME = 3  # [0.01 s] time state relative to the root's leader
 WEAR = 4  # [1e-4] tyre wear
-LANE_COUNT = 5  # eq. (9) counter
+LANE_COUNT = 5  # eq. (10) gen_lane_var: recent lane changes on this contiguous straight or curve
 PREV_LANE = 6  # 0-based lane at the previous checkpoint (to tell when two players' paths cross)
 N_FIELDS = 7
 
@@ -54,7 +54,11 @@ def worn_after(tb: GameTables, wear_units: int, yaw: float) -> int:
 
 @njit(cache=True)
 def next_player(state: np.ndarray, round_checkpoint: int) -> int:
-    """The player to move: among those still at ``round_checkpoint``, the one with the smallest time state."""
+    """The player to move: among those still at ``round_checkpoint``, the one with the smallest time state.
+
+    The player behind moves after the leader and sees its choice, so it is the one that must avoid the
+    collision (the paper's rule of eqs. (8)-(9) gen_coll_avoid, section 4.1.2).
+    """
     best = NO_PLAYER
     for p in range(state.shape[0]):
         if state[p, CHECKPOINT] == round_checkpoint and (best == NO_PLAYER or state[p, TIME] < state[best, TIME]):
@@ -74,6 +78,7 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
     n = tb.straight.shape[0]
     c = state[p, CHECKPOINT] % n
     here = state[p, LANE]
+    # eq. (10) gen_lane_var (the counter) and eq. (11) gen_lane_lim (at most L changes on a straight)
     count, illegal = lane_change_update(
         state[p, LANE_COUNT], here, lane, tb.straight[c], tb.straight[(c + 1) % n], tb.lane_limit
     )
@@ -104,6 +109,7 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
     if 0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin]) > entry + 1e-9:
         return 0, 0, 0
     arrival = state[p, TIME] + int(t * 100.0 + 0.5)
+    # eq. (8) gen_coll_avoid as the paper discretises it: no arrival close in time in the same lane or across a path
     if tb.collision_window > 0:
         target = state[p, CHECKPOINT] + 1
         for q in range(state.shape[0]):
@@ -147,29 +153,3 @@ def apply_move(tb: GameTables, state: np.ndarray, p: int, action: int) -> bool:
     state[p, TIME] = arrival
     state[p, LANE_COUNT] = count
     return True
-
-
-RACE_SHARE = 0.8  # share of the value range given to the time advantage over the others (the rest: own pace)
-
-
-@njit(cache=True)
-def terminal_values(tb: GameTables, state: np.ndarray, reference: np.ndarray, out: np.ndarray) -> None:
-    """Value in [0, 1] of a finished game for every player.
-
-    Mostly (``RACE_SHARE``) the time advantage over the mean of the others, in units of ``value_scale`` and
-    clipped (the paper's objective, eq. 1); the rest rewards the player's own pace against ``reference[p]``
-    (its time under the fast-move rollout policy from the root), so a player far ahead or alone still
-    prefers the faster plan instead of seeing every move as equal.
-    """
-    n = state.shape[0]
-    total = 0
-    for q in range(n):
-        total += state[q, TIME]
-    for p in range(n):
-        pace = min(max((reference[p] - state[p, TIME]) / tb.value_scale, -1.0), 1.0)
-        if n == 1:
-            out[p] = 0.5 + 0.5 * pace
-            continue
-        others = (total - state[p, TIME]) / (n - 1)
-        race = min(max((others - state[p, TIME]) / tb.value_scale, -1.0), 1.0)
-        out[p] = 0.5 + 0.5 * (RACE_SHARE * race + (1.0 - RACE_SHARE) * pace)

@@ -1,0 +1,172 @@
+"""A controller's public parameters come from its parameter dataclass, and a request can set them: validated by
+name, type and bounds, with an error that names the parameter, and carried to the parts that use them."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import pickle
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as hs
+
+from controllers.base import Action, RaceContext
+from controllers.fixed_line import FixedLinePlanner
+from controllers.hierarchical import HierarchicalController
+from controllers.lane_follower import LaneFollowerController
+from controllers.lq.tracker import FIXED_LINE_TRACKING, MCTS_TRACKING, LQNGTracker
+from controllers.parameters import Parameter, ParameterError, parameter, parameters_of
+from controllers.registry import (
+    REGISTRY,
+    ControllerSpec,
+    controller_factory,
+    controller_names,
+    make_controller,
+    validate_parameters,
+)
+from controllers.tactical.game import GameParams
+from controllers.tactical.high_level import MCTSPlanner
+from sim_core.observation import Observation
+
+
+@pytest.mark.parametrize("name", controller_names())
+def test_published_parameters_are_the_dataclass_fields_and_defaults_lie_within_bounds(name: str) -> None:
+    spec = REGISTRY[name]
+    assert spec.params_type is not None
+    fields = dataclasses.fields(spec.params_type)
+    assert [p.name for p in spec.parameter_list] == [f.name for f in fields]
+    assert dict(spec.parameters) == {f.name: str(f.default) for f in fields}
+    for p in spec.parameter_list:
+        assert p.description, f"{name}.{p.name} is undocumented"
+        assert p.minimum is not None and p.maximum is not None, f"{name}.{p.name} has no bounds"
+        assert isinstance(p.default, int | float) and p.minimum <= p.default <= p.maximum
+    assert validate_parameters(name, {}) == spec.params_type()
+
+
+def test_the_published_defaults_keep_the_documented_names() -> None:
+    assert dict(REGISTRY["mcts-lqng"].parameters) == {
+        "iterations": "2000",
+        "horizon": "8",
+        "planner_rate_hz": "1.0",
+        "lqng_horizon_steps": "4",
+    }
+    assert dict(REGISTRY["fixed-lqng"].parameters) == {"line_margin_m": "1.0", "lqng_horizon_steps": "4"}
+
+
+def test_overrides_reach_the_parts_that_use_them() -> None:
+    driver = make_controller("mcts-lqng", iterations=300, horizon=5, planner_rate_hz=2, lqng_horizon_steps=6)
+    assert isinstance(driver, HierarchicalController)
+    assert isinstance(driver.planner, MCTSPlanner) and isinstance(driver.tracker, LQNGTracker)
+    assert driver.planner.iterations == 300 and driver.planner.params.horizon == 5
+    assert driver.planner.rate_hz == 2.0 and isinstance(driver.planner.rate_hz, float)
+    assert driver.tracker.params.horizon == 6
+    fixed = make_controller("fixed-lqng", line_margin_m=1.5)
+    assert isinstance(fixed, HierarchicalController) and isinstance(fixed.planner, FixedLinePlanner)
+    assert fixed.planner.margin == 1.5
+    follower = make_controller("lane-follower", acceleration_gain=2.0)
+    assert isinstance(follower, LaneFollowerController) and follower.params.acceleration_gain == 2.0
+
+
+def test_defaults_build_the_tuned_drivers() -> None:
+    default = make_controller("mcts-lqng")
+    assert isinstance(default, HierarchicalController) and isinstance(default.tracker, LQNGTracker)
+    assert default.tracker.params == MCTS_TRACKING
+    assert isinstance(default.planner, MCTSPlanner) and default.planner.params == GameParams()
+    assert (default.planner.iterations, default.planner.rate_hz) == (2000, 1.0)
+    fixed = make_controller("fixed-lqng")
+    assert isinstance(fixed, HierarchicalController) and isinstance(fixed.tracker, LQNGTracker)
+    assert fixed.tracker.params == FIXED_LINE_TRACKING
+
+
+@pytest.mark.parametrize(
+    ("overrides", "parameter_name", "message"),
+    [
+        ({"iterations": 0}, "iterations", "below its minimum 1"),
+        ({"iterations": 1_000_000}, "iterations", "above its maximum"),
+        ({"iterations": "2000"}, "iterations", "must be an int"),
+        ({"iterations": 2000.0}, "iterations", "must be an int"),
+        ({"iterations": True}, "iterations", "must be an int"),
+        ({"planner_rate_hz": math.nan}, "planner_rate_hz", "finite"),
+        ({"planner_rate_hz": math.inf}, "planner_rate_hz", "finite"),
+        ({"planner_rate_hz": None}, "planner_rate_hz", "must be a float"),
+        ({"search_depth": 3}, "search_depth", r"unknown \(known: iterations, horizon"),
+    ],
+)
+def test_a_bad_parameter_is_refused_by_name(overrides: dict[str, object], parameter_name: str, message: str) -> None:
+    with pytest.raises(ParameterError, match=message) as caught:
+        validate_parameters("mcts-lqng", overrides)
+    assert caught.value.controller == "mcts-lqng" and caught.value.parameter == parameter_name
+    assert isinstance(caught.value, ValueError) and repr(parameter_name) in str(caught.value)
+    with pytest.raises(ParameterError):
+        make_controller("mcts-lqng", **overrides)
+
+
+def test_an_unknown_controller_is_still_a_key_error() -> None:
+    with pytest.raises(KeyError, match="unknown controller 'nope'"):
+        validate_parameters("nope", {})
+    with pytest.raises(KeyError, match="unknown controller 'nope'"):
+        controller_factory("nope")
+
+
+@given(data=hs.data())
+def test_any_value_within_bounds_is_accepted_and_any_outside_refused(data: hs.DataObject) -> None:
+    name = data.draw(hs.sampled_from(controller_names()))
+    p = data.draw(hs.sampled_from(REGISTRY[name].parameter_list))
+    assert p.minimum is not None and p.maximum is not None
+    if p.type == "int":
+        inside: object = data.draw(hs.integers(math.ceil(p.minimum), int(p.maximum)))
+        outside: object = data.draw(hs.integers(int(p.maximum) + 1) | hs.integers(max_value=int(p.minimum) - 1))
+    else:
+        inside = data.draw(hs.floats(p.minimum, p.maximum))
+        outside = data.draw(hs.floats(min_value=p.maximum, exclude_min=True, allow_infinity=False))
+    assert getattr(validate_parameters(name, {p.name: inside}), p.name) == inside
+    with pytest.raises(ParameterError):
+        validate_parameters(name, {p.name: outside})
+
+
+def test_a_validated_factory_pickles_for_the_worker_processes() -> None:
+    params = validate_parameters("mcts-lqng", {"iterations": 100})
+    driver = pickle.loads(pickle.dumps(controller_factory("mcts-lqng", params)))()
+    assert isinstance(driver, HierarchicalController) and isinstance(driver.planner, MCTSPlanner)
+    assert driver.planner.iterations == 100
+    for name in controller_names():
+        assert pickle.loads(pickle.dumps(REGISTRY[name].factory))().name == name
+
+
+class _Still:
+    """A test-only driver without parameters."""
+
+    name = "still"
+    rate_hz = 50.0
+
+    def reset(self, context: RaceContext) -> None:
+        """Nothing to prepare."""
+
+    def act(self, observation: Observation) -> Action:
+        """Stands still."""
+        return Action(0.0, 0.0)
+
+
+def test_a_controller_without_a_parameter_dataclass_takes_none() -> None:
+    spec: ControllerSpec[None] = ControllerSpec("still", "test-only", _Still)
+    assert spec.parameters == {} and spec.parameter_list == ()
+    assert spec.validate({}) is None and spec.factory_for(None) is _Still
+    with pytest.raises(ParameterError, match="'speed' is unknown"):
+        spec.validate({"speed": 1.0})
+
+
+def test_parameters_of_reads_types_and_bounds_from_the_fields() -> None:
+    @dataclasses.dataclass(frozen=True)
+    class Tuning:
+        gain: float = parameter(1.5, "how hard", unit="1/s", minimum=0.0, maximum=3.0)
+        steps: int = 4
+        verbose: bool = False
+
+    assert parameters_of(Tuning) == (
+        Parameter("gain", "float", 1.5, "how hard", "1/s", 0.0, 3.0),
+        Parameter("steps", "int", 4),
+        Parameter("verbose", "bool", False),
+    )
+    with pytest.raises(ValueError, match="minimum 2 > maximum 1"):
+        parameter(1, minimum=2, maximum=1)
