@@ -92,3 +92,7 @@ N_RULE = 17
 # lane-change counting rules (RP_LANE_COUNTING)
 LANE_COUNTING_PER_STEP = 0
 LANE_COUNTING_CHECKPOINT = 1
+
+# bits of the per-pair flags (World.pair_flags)
+PAIR_BUFFER = 1  # the nose-side kart is inside its buffer
+PAIR_CONTACT = 2  # the two bodies touch

@@ -12,10 +12,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim_core import state as st
-from sim_core.geometry import track_arrays
+from sim_core.kernel_arrays import WorldArrays
 from sim_core.params import DT, SimParams
-from sim_core.step import sense_batch, step_batch
+from sim_core.sensors import sense_batch
+from sim_core.step import step_batch
 from sim_core.track import Track
+from sim_core.track_arrays import track_arrays
 
 MAX_KARTS = 8
 DEFAULT_START_LANES = (2, 3, 1, 4)
@@ -168,7 +170,7 @@ class World:
                 offset = START_OFFSET - ROW_SPACING * row
                 d = float(self.track.lane_offsets(0)[lane - 1])
                 self.place_kart(b, k, s=offset, d=d, wear=start_wear)
-        self._sense()
+        self.sense()
 
     def place_kart(
         self,
@@ -228,18 +230,22 @@ class World:
             return [races]
         return list(races)
 
-    def _sense(self) -> None:
+    def sense(self) -> None:
+        """Cast every kart's rays now (``reset`` does; call it after moving karts by hand with ``place_kart``)."""
         if self.sensors:
-            sense_batch(
-                self.fstate,
-                self.istate,
-                self.ray_dist,
-                self.ray_hit,
-                self.arrays,
-                self.kart_vector,
-                self.rule_vector,
-                self.ray_angles,
-            )
+            sense_batch(self._world_arrays(), self.arrays, self.kart_vector, self.rule_vector, self.ray_angles)
+
+    def _world_arrays(self) -> WorldArrays:
+        return WorldArrays(
+            self.fstate,
+            self.istate,
+            self.rstate,
+            self.pair_flags,
+            self.target_lane,
+            self.target_speed,
+            self.ray_dist,
+            self.ray_hit,
+        )
 
     # ------------------------------------------------------------------ stepping
     def step(self, actions: np.ndarray | None = None, n_steps: int = 1) -> None:
@@ -250,14 +256,7 @@ class World:
         if actions.shape != (self.n_races, self.n_karts, 2):
             raise ValueError(f"actions must have shape {(self.n_races, self.n_karts, 2)}, got {actions.shape}")
         step_batch(
-            self.fstate,
-            self.istate,
-            self.rstate,
-            self.pair_flags,
-            self.target_lane,
-            self.target_speed,
-            self.ray_dist,
-            self.ray_hit,
+            self._world_arrays(),
             actions,
             self.arrays,
             self.kart_vector,

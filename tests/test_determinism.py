@@ -37,7 +37,7 @@ def test_race_alone_equals_race_in_a_batch_of_1024() -> None:
         for k in range(2):
             world.fstate[0, k] = batch.fstate[b, k]
             world.istate[0, k] = batch.istate[b, k]
-        world._sense()
+        world.sense()
     for step in range(N_STEPS):
         batch.step(actions[step])
         for b, world in alone.items():

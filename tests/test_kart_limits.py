@@ -16,7 +16,7 @@ from controllers.lane_follower import LaneFollower
 from sim_core import state as st
 from sim_core.kart import kart_step, max_slip, throttle_for_acceleration
 from sim_core.params import DT, ORIGINAL_KART, PAPER_KART, KartParams, SimParams
-from sim_core.step import PAIR_CONTACT
+from sim_core.state import PAIR_CONTACT
 from sim_core.track_io import get_track
 from sim_core.world import World
 

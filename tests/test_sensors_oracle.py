@@ -1,7 +1,7 @@
 """Oracle for the fast range rays: the world's sensors equal brute force.
 
 A kart on the track casts each ray against its grid cell's short list of wall segments for the ray's
-direction bin (``cast_rays``, lists built offline by ``ray_grid``); :func:`sim_core.geometry.ray_walls`
+direction bin (``cast_rays``, lists built offline by ``ray_grid``); :func:`sim_core.sensors.ray_walls`
 tests the cell's whole reach list, which holds every wall segment within the rays' range. The lists are only
 an acceleration: for any pose on any track the two must give the same distance. Hypothesis draws poses
 (progress, lateral offset within the walls, any heading) on every built-in track and its reverse, with one
@@ -18,7 +18,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sim_core.geometry import ray_walls
+from sim_core.sensors import ray_walls
 from sim_core.state import HIT_NONE, HIT_WALL
 from sim_core.track_io import builtin_track_names, get_track
 from sim_core.world import World
@@ -56,7 +56,7 @@ def place(world: World, progress: float, lateral: float, heading_offset: float) 
     i = int(np.searchsorted(track.centre_s, s, side="right")) - 1
     d = lateral * (track.width_left[i] if lateral >= 0 else track.width_right[i]) * INSIDE
     world.place_kart(0, 0, s, d, heading_offset=heading_offset)
-    world._sense()  # the sensors of a placed kart (reset() and step() call the same)
+    world.sense()  # the sensors of a placed kart (reset() and step() call the same)
     return s, d
 
 

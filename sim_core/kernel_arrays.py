@@ -1,0 +1,79 @@
+"""The arrays the compiled step kernels pass around, bundled in named tuples (numba compiles field access to a
+plain load, so a bundle costs nothing over separate arguments), and the compile options of the per-race
+kernels.
+
+:class:`WorldArrays` is the world's state (layout in :mod:`sim_core.state`), :class:`StepScratch` the work
+arrays of one step, :class:`RayTables` the sensors' angles prepared once per batch call.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+from numba import njit
+
+# The per-race kernels run without numba's reference counting: they allocate nothing, and counting the
+# references of every array passed to or taken from a namedtuple (atomic updates) was half of a step's time.
+NO_REFCOUNT: dict[str, Any] = {"cache": True, "_nrt": False}
+
+
+class WorldArrays(NamedTuple):
+    """The batched world's state: B races x K karts (see :mod:`sim_core.state` for the columns)."""
+
+    F: np.ndarray  # (B, K, N_FLOAT) float state per kart
+    I: np.ndarray  # (B, K, N_INT) integer state per kart  # noqa: E741
+    R: np.ndarray  # (B, N_RACE) integer state per race
+    pair_flags: np.ndarray  # (B, K, K) PAIR_* bits per ordered pair
+    target_lane: np.ndarray  # (B, K, N) planned lane per checkpoint (0 = none)
+    target_speed: np.ndarray  # (B, K, N) planned speed per checkpoint (NaN = none)
+    ray_dist: np.ndarray  # (B, K, rays) [m]
+    ray_hit: np.ndarray  # (B, K, rays) HIT_* kind
+
+
+class StepScratch(NamedTuple):
+    """Work arrays of one race's step, reused across races and steps (no allocation inside the kernels)."""
+
+    prev_s: np.ndarray  # (K,) progress before the step
+    prev_d: np.ndarray  # (K,) lateral offset before the step
+    heading_before: np.ndarray  # (K,) heading after the dynamics, before contacts
+    speed_before: np.ndarray  # (K,) speed after the dynamics, before contacts
+    wall_touch: np.ndarray  # (K,) bool: touched a wall this step
+    fault_touch: np.ndarray  # (K,) bool: at fault in a new contact this step
+    contact: np.ndarray  # (K, K) bool, i < j: touching in any contact round
+    first_touch: np.ndarray  # (K, K) bool, i < j: touching in the first contact round
+    front: np.ndarray  # (K, K) bool: i's front touches j (first round)
+    located: np.ndarray  # (K, 5) [x, y, s, d, sample index] of the last located position
+    bodies: np.ndarray  # (K, 6) [cos, sin, rear x, rear y, front x, front y] of every kart's body axis
+    fan: np.ndarray  # (3, rays) ray directions x, y and wall distances
+    centre: np.ndarray  # (K, 2) [sample index, lateral offset] of every kart for the sensors
+
+
+class RayTables(NamedTuple):
+    """The sensors' ray angles prepared for the kernels."""
+
+    cos: np.ndarray  # (rays,) cos of the angle from the heading
+    sin: np.ndarray  # (rays,)
+    bins: np.ndarray  # (rays,) the angles in ray-grid direction bins
+
+
+@njit(cache=True)
+def make_scratch(n_karts: int, n_rays: int) -> StepScratch:
+    """Work arrays for races of ``n_karts`` karts with ``n_rays`` rays each (made inside the compiled batch
+    call: passing a bundle of arrays into compiled code costs a conversion per array and call)."""
+    K = n_karts
+    return StepScratch(
+        prev_s=np.empty(K),
+        prev_d=np.empty(K),
+        heading_before=np.empty(K),
+        speed_before=np.empty(K),
+        wall_touch=np.zeros(K, dtype=np.bool_),
+        fault_touch=np.zeros(K, dtype=np.bool_),
+        contact=np.zeros((K, K), dtype=np.bool_),
+        first_touch=np.zeros((K, K), dtype=np.bool_),
+        front=np.zeros((K, K), dtype=np.bool_),
+        located=np.full((K, 5), np.nan),
+        bodies=np.empty((K, 6)),
+        fan=np.empty((3, n_rays)),
+        centre=np.empty((K, 2)),
+    )
