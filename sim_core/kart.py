@@ -61,6 +61,12 @@ def tyre_wear(p: np.ndarray, accumulated_yaw: float) -> float:
 
 
 @njit(cache=True, inline="always")
+def yaw_for_wear(p: np.ndarray, wear: float) -> float:
+    """Inverse of :func:`tyre_wear`: the accumulated yaw [rad] that gives ``wear`` (< wear_gain)."""
+    return -p[P_WEAR_SCALE] * math.log(1.0 - wear / p[P_WEAR_GAIN])
+
+
+@njit(cache=True, inline="always")
 def lateral_limit(p: np.ndarray, wear: float) -> float:
     """Lateral acceleration limit [m/s^2] at tyre wear ``wear``."""
     return (p[P_G_WORN] + (1.0 - wear) * (p[P_G_FRESH] - p[P_G_WORN])) * GRAVITY

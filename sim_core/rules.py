@@ -46,3 +46,16 @@ def required_buffer(directly_behind: bool, buffer_side: float, buffer_behind: fl
     """eqs. (8)-(9) gen_coll_avoid: the nose-to-body distance a kart must keep: s1 when directly behind the
     other, else s0."""
     return buffer_behind if directly_behind else buffer_side
+
+
+def safety_score(collisions_at_fault: int, illegal_lane_changes: int) -> int:
+    """The paper's safety score of one kart in one race (section 5.2.2): collisions at fault plus illegal lane
+    changes (lower is safer)."""
+    return collisions_at_fault + illegal_lane_changes
+
+
+def race_winner(finish_times: list[float | None]) -> int | None:
+    """The winner: the kart with the earliest finish (the lower index on a tie); nobody when nobody finished
+    (a DNF never wins)."""
+    finishers = [(t, k) for k, t in enumerate(finish_times) if t is not None]
+    return min(finishers)[1] if finishers else None

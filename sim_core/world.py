@@ -14,6 +14,7 @@ import numpy as np
 from sim_core import state as st
 from sim_core.kernel_arrays import WorldArrays
 from sim_core.params import DT, SimParams
+from sim_core.rules import race_winner, safety_score
 from sim_core.sensors import sense_batch
 from sim_core.step import step_batch
 from sim_core.track import Track
@@ -355,7 +356,7 @@ class World:
                     checkpoints_passed=int(i[st.I_CP_PASSED]),
                     collisions_at_fault=faults,
                     illegal_lane_changes=illegal,
-                    safety_score=faults + illegal,
+                    safety_score=safety_score(faults, illegal),
                     wall_hits=int(i[st.I_WALL_HITS]),
                     contacts=int(i[st.I_CONTACTS]),
                     buffer_violations=int(i[st.I_BUFFER_VIOLATIONS]),
@@ -366,8 +367,7 @@ class World:
                     illegal_lane_changes_checkpoint=int(i[st.I_ILLEGAL_CHECKPOINT]),
                 )
             )
-        finishers = [kr for kr in karts if kr.finished]
-        winner = min(finishers, key=lambda kr: (kr.finish_time, kr.kart)).kart if finishers else None
+        winner = race_winner([kr.finish_time for kr in karts])
         return RaceResult(tuple(karts), winner, float(self.time[race]), bool(self.done[race]))
 
     # ------------------------------------------------------------------ state copies

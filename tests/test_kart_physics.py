@@ -141,3 +141,16 @@ def test_positive_steer_turns_left() -> None:
     p = PAPER_KART.as_array()
     *_, yaw_rate, _ = kart_step(p, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.5, 0.0, DT)
     assert yaw_rate > 0
+
+
+@pytest.mark.parametrize("params", [PAPER_KART, ORIGINAL_KART], ids=lambda p: p.name)
+def test_compiled_wear_and_grip_model_equals_the_parameter_methods(params: KartParams) -> None:
+    """One tyre-wear / grip model: the kernels' (also the planner's game's) and KartParams' vectorised twin."""
+    from sim_core.kart import lateral_limit, tyre_wear, yaw_for_wear
+
+    p = params.as_array()
+    for yaw in np.linspace(0.0, 400.0, 41):
+        assert tyre_wear(p, yaw) == pytest.approx(float(params.wear_from_yaw(yaw)), rel=1e-12)
+    for wear in np.linspace(0.0, 0.99, 34):
+        assert lateral_limit(p, wear) == pytest.approx(float(params.lateral_limit(wear)), rel=1e-12)
+        assert yaw_for_wear(p, wear) == pytest.approx(params.yaw_for_wear(wear), rel=1e-12)

@@ -58,10 +58,7 @@ class GameTables(NamedTuple):
     top_speed: float  # [m/s]
     accel: float  # [m/s^2]
     brake: float  # [m/s^2]
-    lateral_fresh: float  # [m/s^2] lateral limit with new tyres
-    lateral_worn: float  # [m/s^2] lateral limit with worn tyres
-    wear_gain: float
-    wear_yaw_scale: float  # [rad]
+    kart: np.ndarray  # the kart's packed parameters: its own grip and tyre-wear model (sim_core.kart)
     collision_window: int  # [0.01 s]; 0 disables collision pruning
     value_scale: float  # [0.01 s]
 
@@ -116,10 +113,7 @@ def build_tables(track: Track, kart: KartParams, params: GameParams, lane_limit:
         top_speed=kart.top_speed,
         accel=kart.acceleration,
         brake=kart.braking,
-        lateral_fresh=float(kart.lateral_limit(0.0)),
-        lateral_worn=float(kart.lateral_limit(1.0)),
-        wear_gain=kart.wear_gain,
-        wear_yaw_scale=kart.wear_yaw_scale,
+        kart=kart.as_array(),
         collision_window=round(params.collision_window * TIME_UNITS_PER_S) if params.collision_pruning else 0,
         value_scale=params.value_scale * TIME_UNITS_PER_S,
     )

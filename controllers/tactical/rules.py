@@ -16,6 +16,7 @@ from numba import njit
 
 from controllers.tactical.game import GameTables
 from controllers.tactical.motion import segment_time
+from sim_core.kart import lateral_limit, tyre_wear, yaw_for_wear
 from sim_core.rules import lane_change_update
 
 # fields of a player's state
@@ -36,8 +37,7 @@ def corner_speed(tb: GameTables, radius: float, wear_units: int) -> float:
     """Cornering speed [m/s] on ``radius`` [m] (0 = straight: top speed) at tyre wear ``wear_units``."""
     if radius <= 0.0:
         return tb.top_speed
-    wear = min(wear_units / 10_000.0, 1.0)
-    a_lat = tb.lateral_worn + (1.0 - wear) * (tb.lateral_fresh - tb.lateral_worn)
+    a_lat = lateral_limit(tb.kart, min(wear_units / 10_000.0, 1.0))
     return min(math.sqrt(a_lat * radius), tb.top_speed)
 
 
@@ -46,10 +46,8 @@ def worn_after(tb: GameTables, wear_units: int, yaw: float) -> int:
     """Tyre wear [1e-4] after turning through ``yaw`` [rad] more (the kart's exponential wear model)."""
     if yaw <= 0.0:
         return wear_units
-    wear = min(wear_units / 10_000.0, 0.999999)
-    accumulated = -tb.wear_yaw_scale * math.log(1.0 - wear / tb.wear_gain)
-    new = tb.wear_gain * (1.0 - math.exp(-(accumulated + yaw) / tb.wear_yaw_scale))
-    return max(int(min(new, 1.0) * 10_000.0 + 0.5), wear_units)
+    accumulated = yaw_for_wear(tb.kart, min(wear_units / 10_000.0, 0.999999))
+    return max(int(tyre_wear(tb.kart, accumulated + yaw) * 10_000.0 + 0.5), wear_units)
 
 
 @njit(cache=True)
