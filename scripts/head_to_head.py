@@ -36,6 +36,7 @@ def main(
             "illegal_per_step": [],
             "illegal_checkpoint": [],
             "safety": [],
+            "passes": [],
             "delta_r": [],
             "delta_v": [],
             "time": [],
@@ -57,6 +58,7 @@ def main(
             stats["illegal_per_step"].append(kart.illegal_lane_changes_per_step)
             stats["illegal_checkpoint"].append(kart.illegal_lane_changes_checkpoint)
             stats["safety"].append(kart.safety_score)
+            stats["passes"].append(kart.passes)
             if kart.delta_r is not None:
                 stats["delta_r"].append(kart.delta_r)
             if kart.delta_v is not None:

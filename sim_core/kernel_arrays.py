@@ -29,6 +29,7 @@ class WorldArrays(NamedTuple):
     target_speed: np.ndarray  # (B, K, N) planned speed per checkpoint (NaN = none)
     ray_dist: np.ndarray  # (B, K, rays) [m]
     ray_hit: np.ndarray  # (B, K, rays) HIT_* kind
+    pass_start: np.ndarray  # (B, K, K) step + 1 at which i got ahead of j in a pass not yet held (0: none)
 
 
 class StepScratch(NamedTuple):
@@ -47,6 +48,7 @@ class StepScratch(NamedTuple):
     bodies: np.ndarray  # (K, 6) [cos, sin, rear x, rear y, front x, front y] of every kart's body axis
     fan: np.ndarray  # (3, rays) ray directions x, y and wall distances
     centre: np.ndarray  # (K, 2) [sample index, lateral offset] of every kart for the sensors
+    progress: np.ndarray  # (K,) [m] distance driven toward the finish
 
 
 class RayTables(NamedTuple):
@@ -76,4 +78,5 @@ def make_scratch(n_karts: int, n_rays: int) -> StepScratch:
         bodies=np.empty((K, 6)),
         fan=np.empty((3, n_rays)),
         centre=np.empty((K, 2)),
+        progress=np.empty(K),
     )

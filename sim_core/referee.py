@@ -52,12 +52,17 @@ from sim_core.state import (
     I_LANE_NOW,
     I_LAST_FAULT_STEP,
     I_LAST_WALL_STEP,
+    I_PASSES,
     I_STEP_LANE_COUNT,
     I_WALL_CONTACT,
     I_WALL_HITS,
     LANE_COUNTING_CHECKPOINT,
     PAIR_BUFFER,
     PAIR_CONTACT,
+    PAIR_I_AHEAD,
+    PAIR_ORDER_KNOWN,
+    PASS_HOLD_STEPS,
+    PASS_MARGIN,
     R_DONE,
     R_STEP,
     RP_ALONGSIDE,
@@ -261,6 +266,53 @@ def judge_contacts(
                 I[b, i, I_BUFFER_VIOLATIONS] += 1
             flags = (flags | PAIR_BUFFER) if violating else (flags & ~PAIR_BUFFER)
             pair_flags[b, i, j] = flags
+
+
+@njit(**NO_REFCOUNT)
+def count_passes(b: int, w: WorldArrays, tr: TrackArrays, step: int, scratch: StepScratch) -> None:
+    """Overtakes: when kart i gets ahead of kart j (by more than ``PASS_MARGIN`` of progress toward the finish)
+    after running behind it, the pass counts for i once it has held the place for ``PASS_HOLD_STEPS`` or
+    finished ahead; losing the place back first cancels it. The order on the grid is not a pass."""
+    F, I = w.F, w.I
+    K = F.shape[1]
+    N = tr.checkpoint_s.shape[0]
+    L = tr.length
+    progress = scratch.progress
+    for k in range(K):
+        passed = I[b, k, I_CP_PASSED]
+        last = passed % N
+        since = wrap_mod(F[b, k, F_S] - tr.checkpoint_s[last], L)
+        if since > 0.5 * L:  # just behind its last checkpoint (driven back over it)
+            since -= L
+        progress[k] = (passed // N) * L + tr.checkpoint_s[last] + since
+    flags_all = w.pair_flags
+    for i in range(K):
+        for j in range(i + 1, K):
+            flags = flags_all[b, i, j]
+            gap = progress[i] - progress[j]
+            if gap > PASS_MARGIN:
+                ahead, behind = i, j
+            elif gap < -PASS_MARGIN:
+                ahead, behind = j, i
+            else:
+                ahead = -1
+                behind = -1
+            if ahead >= 0:
+                i_ahead = ahead == i
+                was_known = (flags & PAIR_ORDER_KNOWN) != 0
+                was_i_ahead = (flags & PAIR_I_AHEAD) != 0
+                if was_known and i_ahead != was_i_ahead:
+                    # the order changed: a pass under way for the new leader; the old leader's one is void
+                    w.pass_start[b, behind, ahead] = 0
+                    w.pass_start[b, ahead, behind] = step + 1
+                flags |= PAIR_ORDER_KNOWN
+                flags = (flags | PAIR_I_AHEAD) if i_ahead else (flags & ~PAIR_I_AHEAD)
+                flags_all[b, i, j] = flags
+            for a, o in ((i, j), (j, i)):
+                start = w.pass_start[b, a, o]
+                if start > 0 and (step + 1 - start >= PASS_HOLD_STEPS or I[b, a, I_FINISHED]):
+                    I[b, a, I_PASSES] += 1
+                    w.pass_start[b, a, o] = 0
 
 
 @njit(**NO_REFCOUNT)

@@ -49,7 +49,8 @@ I_LANE_NOW = 16  # lane (1-based) the kart is in now: lane membership with hyste
 I_STEP_LANE_COUNT = 17  # eq. (10) counter counted as lane changes happen (every step)
 I_ILLEGAL_STEP = 18  # illegal lane changes counted every step (eq. 11)
 I_ILLEGAL_CHECKPOINT = 19  # illegal lane changes sampled at checkpoint crossings (the original's rule)
-N_INT = 20
+I_PASSES = 20  # overtakes completed and held for PASS_HOLD_STEPS (or to the finish)
+N_INT = 21
 
 # integers per race
 R_STEP = 0  # steps simulated
@@ -96,3 +97,8 @@ LANE_COUNTING_CHECKPOINT = 1
 # bits of the per-pair flags (World.pair_flags)
 PAIR_BUFFER = 1  # the nose-side kart is inside its buffer
 PAIR_CONTACT = 2  # the two bodies touch
+PAIR_ORDER_KNOWN = 4  # (i < j) the running order of i and j has been established
+PAIR_I_AHEAD = 8  # (i < j) i runs ahead of j
+
+PASS_HOLD_STEPS = 100  # a pass counts once the passer has held the place this long (2 s)
+PASS_MARGIN = 0.5  # [m] a change of running order needs this much progress in it (no counting of noise)

@@ -18,7 +18,7 @@ from numba import njit
 from sim_core.contacts import resolve_contacts
 from sim_core.kart import kart_step, tyre_wear
 from sim_core.kernel_arrays import NO_REFCOUNT, RayTables, StepScratch, WorldArrays, make_scratch
-from sim_core.referee import advance_clock, judge_contacts, referee_kart
+from sim_core.referee import advance_clock, count_passes, judge_contacts, referee_kart
 from sim_core.sensors import cast_rays, prepare_rays
 from sim_core.state import (
     F_ACC_YAW,
@@ -98,6 +98,7 @@ def step_race(
         if not w.I[b, k, I_FINISHED]:
             referee_kart(b, k, w, tr, rp, step, scratch)
     judge_contacts(b, w, tr, kp, rp, step, scratch)  # headings are final from here on
+    count_passes(b, w, tr, step, scratch)
     advance_clock(b, w, rp)
     if sensors_on:
         for k in range(K):  # every kart was located this step (a finished one has not moved since)

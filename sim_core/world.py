@@ -48,6 +48,7 @@ class KartResult:
     # checkpoint sampling, comparable with the paper's tables)
     illegal_lane_changes_per_step: int = 0
     illegal_lane_changes_checkpoint: int = 0
+    passes: int = 0  # overtakes completed and held for 2 s (or to the finish)
 
 
 @dataclass(frozen=True)
@@ -98,6 +99,7 @@ class World:
         self.istate = np.zeros((n_races, n_karts, st.N_INT), dtype=np.int64)
         self.rstate = np.zeros((n_races, st.N_RACE), dtype=np.int64)
         self.pair_flags = np.zeros((n_races, n_karts, n_karts), dtype=np.int64)
+        self.pass_start = np.zeros((n_races, n_karts, n_karts), dtype=np.int64)
         self.target_lane = np.zeros((n_races, n_karts, n), dtype=np.int64)
         self.target_speed = np.full((n_races, n_karts, n), np.nan)
         n_rays = len(self.ray_angles)
@@ -163,6 +165,7 @@ class World:
             self.istate[b] = 0
             self.rstate[b] = 0
             self.pair_flags[b] = 0
+            self.pass_start[b] = 0
             self.target_lane[b] = 0
             self.target_speed[b] = np.nan
             for k in range(self.n_karts):
@@ -246,6 +249,7 @@ class World:
             self.target_speed,
             self.ray_dist,
             self.ray_hit,
+            self.pass_start,
         )
 
     # ------------------------------------------------------------------ stepping
@@ -365,6 +369,7 @@ class World:
                     position=order.index(k) + 1,
                     illegal_lane_changes_per_step=int(i[st.I_ILLEGAL_STEP]),
                     illegal_lane_changes_checkpoint=int(i[st.I_ILLEGAL_CHECKPOINT]),
+                    passes=int(i[st.I_PASSES]),
                 )
             )
         winner = race_winner([kr.finish_time for kr in karts])
@@ -378,6 +383,7 @@ class World:
             "istate": self.istate.copy(),
             "rstate": self.rstate.copy(),
             "pair_flags": self.pair_flags.copy(),
+            "pass_start": self.pass_start.copy(),
             "target_lane": self.target_lane.copy(),
             "target_speed": self.target_speed.copy(),
             "ray_dist": self.ray_dist.copy(),
