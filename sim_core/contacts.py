@@ -18,7 +18,7 @@ from sim_core.kart import (
     P_WALL_YAW_RATE,
     max_slip,
 )
-from sim_core.kernel_arrays import NO_REFCOUNT, StepScratch, WorldArrays
+from sim_core.kernel_arrays import NO_REFCOUNT, PHASE, StepScratch, WorldArrays
 from sim_core.rules import front_touches
 from sim_core.state import (
     F_HEADING,
@@ -37,7 +37,7 @@ from sim_core.track_arrays import TrackArrays
 CONTACT_ROUNDS = 4  # relaxation rounds of wall and kart-kart contact per step
 
 
-@njit(**NO_REFCOUNT)
+@njit(**PHASE)
 def resolve_contacts(
     b: int, w: WorldArrays, tr: TrackArrays, kp: np.ndarray, rp: np.ndarray, scratch: StepScratch
 ) -> None:

@@ -12,7 +12,7 @@ from numba import njit
 
 from sim_core.geometry import body_axes, locate, point_segment_distance, wrap_mod
 from sim_core.kart import P_HALF_LENGTH, P_RADIUS
-from sim_core.kernel_arrays import NO_REFCOUNT, StepScratch, WorldArrays
+from sim_core.kernel_arrays import NO_REFCOUNT, PHASE, StepScratch, WorldArrays
 from sim_core.rules import lane_change_update, required_buffer
 from sim_core.state import (
     EV_CHECKPOINT,
@@ -82,7 +82,7 @@ from sim_core.state import (
 from sim_core.track_arrays import TrackArrays
 
 
-@njit(**NO_REFCOUNT)
+@njit(**PHASE)
 def referee_kart(
     b: int, k: int, w: WorldArrays, tr: TrackArrays, rp: np.ndarray, step: int, scratch: StepScratch
 ) -> None:
@@ -122,13 +122,17 @@ def referee_kart(
         frac = ahead / ds
         _cross_checkpoint(b, k, c, frac, prev_d[k] + frac * (d - prev_d[k]), w, tr, rp, step, by_checkpoint)
     # eqs. (10)-(11) as they happen: the lane the kart is in now (with hysteresis), every step
-    lane_now = lane_with_hysteresis(tr.sample_lane_offsets[idx], d, I[b, k, I_LANE_NOW], rp[RP_LANE_HYSTERESIS])
+    lane_before = I[b, k, I_LANE_NOW]
+    lane_now = lane_with_hysteresis(tr.sample_lane_offsets, idx, d, lane_before, rp[RP_LANE_HYSTERESIS])
+    passed = I[b, k, I_CP_PASSED]
+    if lane_now == lane_before and passed == passed_before:
+        return  # (the common step: no lane change, no new section; the rule would change nothing)
     count, illegal = lane_change_update(
         I[b, k, I_STEP_LANE_COUNT],
-        I[b, k, I_LANE_NOW],
+        lane_before,
         lane_now,
         tr.straight[passed_before % N],
-        tr.straight[I[b, k, I_CP_PASSED] % N],
+        tr.straight[passed % N],
         lane_limit,
     )
     I[b, k, I_STEP_LANE_COUNT] = count
@@ -140,7 +144,7 @@ def referee_kart(
             I[b, k, I_EVENTS] |= EV_ILLEGAL_LANE_CHANGE
 
 
-@njit(**NO_REFCOUNT)
+@njit(**PHASE)
 def _cross_checkpoint(
     b: int,
     k: int,
@@ -200,7 +204,7 @@ def _cross_checkpoint(
         I[b, k, I_EVENTS] |= EV_FINISHED
 
 
-@njit(**NO_REFCOUNT)
+@njit(**PHASE)
 def judge_contacts(
     b: int, w: WorldArrays, tr: TrackArrays, kp: np.ndarray, rp: np.ndarray, step: int, scratch: StepScratch
 ) -> None:
@@ -268,7 +272,7 @@ def judge_contacts(
             pair_flags[b, i, j] = flags
 
 
-@njit(**NO_REFCOUNT)
+@njit(**PHASE)
 def count_passes(b: int, w: WorldArrays, tr: TrackArrays, step: int, scratch: StepScratch) -> None:
     """Overtakes: when kart i gets ahead of kart j (by more than ``PASS_MARGIN`` of progress toward the finish)
     after running behind it, the pass counts for i once it has held the place for ``PASS_HOLD_STEPS`` or
@@ -315,7 +319,7 @@ def count_passes(b: int, w: WorldArrays, tr: TrackArrays, step: int, scratch: St
                     w.pass_start[b, a, o] = 0
 
 
-@njit(**NO_REFCOUNT)
+@njit(**PHASE)
 def advance_clock(b: int, w: WorldArrays, rp: np.ndarray) -> None:
     """One step more on race b's clock; the race is done once every kart finished or the time ran out."""
     I, R = w.I, w.R
@@ -331,19 +335,20 @@ def advance_clock(b: int, w: WorldArrays, rp: np.ndarray) -> None:
 
 
 @njit(cache=True, inline="always")
-def lane_with_hysteresis(offsets: np.ndarray, d: float, current: int, hysteresis: float) -> int:
-    """The lane (1-based) a kart at lateral offset ``d`` is in, given the lane ``current`` it was in: the nearest
-    lane, but a kart leaves its lane only once it is ``hysteresis`` past the midpoint toward the other."""
+def lane_with_hysteresis(offsets: np.ndarray, row: int, d: float, current: int, hysteresis: float) -> int:
+    """The lane (1-based) a kart at lateral offset ``d`` is in, given the lane ``current`` it was in (lane
+    offsets in ``offsets[row]``): the nearest lane, but a kart leaves its lane only once it is ``hysteresis``
+    past the midpoint toward the other."""
     nearest = 0
-    best = abs(offsets[0] - d)
-    for q in range(1, offsets.shape[0]):
-        gap = abs(offsets[q] - d)
+    best = abs(offsets[row, 0] - d)
+    for q in range(1, offsets.shape[1]):
+        gap = abs(offsets[row, q] - d)
         if gap < best:
             best, nearest = gap, q
     nearest += 1
     if nearest == current or current < 1:
         return nearest
-    if abs(offsets[current - 1] - d) - best > 2.0 * hysteresis:
+    if abs(offsets[row, current - 1] - d) - best > 2.0 * hysteresis:
         return nearest
     return current
 

@@ -272,9 +272,19 @@ def prepare_rays(ray_angles: np.ndarray, grid_bins: int) -> tuple[np.ndarray, np
 
 
 @njit(cache=True)
-def sense_batch(w: WorldArrays, tr: TrackArrays, kp: np.ndarray, rp: np.ndarray, ray_angles: np.ndarray) -> None:
+def sense_batch(
+    F: np.ndarray,
+    I: np.ndarray,
+    ray_dist: np.ndarray,
+    ray_hit: np.ndarray,
+    tr: TrackArrays,
+    kp: np.ndarray,
+    rp: np.ndarray,
+    ray_angles: np.ndarray,
+) -> None:
     """Cast every kart's rays (used after a reset, before the first step)."""
-    F, I = w.F, w.I
+    empty = np.zeros((0, 0, 0), dtype=np.int64)  # the sensors read no other state
+    w = WorldArrays(F, I, empty, empty, empty, np.zeros((0, 0, 0)), ray_dist, ray_hit, empty)
     cos, sin, bins = prepare_rays(ray_angles, tr.ray_bins)
     rays = RayTables(cos, sin, bins)
     scratch = make_scratch(F.shape[1], ray_angles.shape[0])

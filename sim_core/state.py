@@ -101,4 +101,5 @@ PAIR_ORDER_KNOWN = 4  # (i < j) the running order of i and j has been establishe
 PAIR_I_AHEAD = 8  # (i < j) i runs ahead of j
 
 PASS_HOLD_STEPS = 100  # a pass counts once the passer has held the place this long (2 s)
+PASS_CHECK_STEPS = 5  # the running order is checked every this many steps (10 Hz)
 PASS_MARGIN = 0.5  # [m] a change of running order needs this much progress in it (no counting of noise)

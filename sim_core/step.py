@@ -17,7 +17,7 @@ from numba import njit
 
 from sim_core.contacts import resolve_contacts
 from sim_core.kart import kart_step, tyre_wear
-from sim_core.kernel_arrays import NO_REFCOUNT, RayTables, StepScratch, WorldArrays, make_scratch
+from sim_core.kernel_arrays import NO_REFCOUNT, PHASE, RayTables, StepScratch, WorldArrays, make_scratch
 from sim_core.referee import advance_clock, count_passes, judge_contacts, referee_kart
 from sim_core.sensors import cast_rays, prepare_rays
 from sim_core.state import (
@@ -36,6 +36,7 @@ from sim_core.state import (
     I_CENTRE_IDX,
     I_EVENTS,
     I_FINISHED,
+    PASS_CHECK_STEPS,
     R_DONE,
     R_STEP,
     RP_DT,
@@ -43,7 +44,7 @@ from sim_core.state import (
 from sim_core.track_arrays import TrackArrays
 
 
-@njit(**NO_REFCOUNT)
+@njit(**PHASE)
 def drive_karts(b: int, w: WorldArrays, actions: np.ndarray, kp: np.ndarray, dt: float, scratch: StepScratch) -> None:
     """The dynamics of every unfinished kart of race ``b`` under its action (contacts come after)."""
     F, I = w.F, w.I
@@ -98,7 +99,8 @@ def step_race(
         if not w.I[b, k, I_FINISHED]:
             referee_kart(b, k, w, tr, rp, step, scratch)
     judge_contacts(b, w, tr, kp, rp, step, scratch)  # headings are final from here on
-    count_passes(b, w, tr, step, scratch)
+    if step % PASS_CHECK_STEPS == 0:  # a pass takes 2 s to count: 10 Hz is plenty
+        count_passes(b, w, tr, step, scratch)
     advance_clock(b, w, rp)
     if sensors_on:
         for k in range(K):  # every kart was located this step (a finished one has not moved since)
@@ -109,7 +111,15 @@ def step_race(
 
 @njit(cache=True)
 def step_batch(
-    w: WorldArrays,
+    F: np.ndarray,
+    I: np.ndarray,
+    R: np.ndarray,
+    pair_flags: np.ndarray,
+    target_lane: np.ndarray,
+    target_speed: np.ndarray,
+    ray_dist: np.ndarray,
+    ray_hit: np.ndarray,
+    pass_start: np.ndarray,
     actions: np.ndarray,
     tr: TrackArrays,
     kp: np.ndarray,
@@ -118,11 +128,13 @@ def step_batch(
     sensors_on: bool,
     n_steps: int,
 ) -> None:
-    """Advance every race of the batch by ``n_steps`` steps with the same actions held (sensor ``ray_angles``
-    in radians from the heading, counter-clockwise)."""
+    """Advance every race of the batch by ``n_steps`` steps with the same actions held (the fields of
+    :class:`WorldArrays` one by one: numba types a bundle passed in from Python several times slower than
+    its arrays; sensor ``ray_angles`` in radians from the heading, counter-clockwise)."""
+    w = WorldArrays(F, I, R, pair_flags, target_lane, target_speed, ray_dist, ray_hit, pass_start)
     cos, sin, bins = prepare_rays(ray_angles, tr.ray_bins)
     rays = RayTables(cos, sin, bins)
-    scratch = make_scratch(w.F.shape[1], ray_angles.shape[0])
+    scratch = make_scratch(F.shape[1], ray_angles.shape[0])
     for _ in range(n_steps):
-        for b in range(w.F.shape[0]):
+        for b in range(F.shape[0]):
             step_race(b, w, actions, tr, kp, rp, rays, sensors_on, scratch)

@@ -12,7 +12,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim_core import state as st
-from sim_core.kernel_arrays import WorldArrays
 from sim_core.params import DT, SimParams
 from sim_core.rules import race_winner, safety_score
 from sim_core.sensors import sense_batch
@@ -237,20 +236,16 @@ class World:
     def sense(self) -> None:
         """Cast every kart's rays now (``reset`` does; call it after moving karts by hand with ``place_kart``)."""
         if self.sensors:
-            sense_batch(self._world_arrays(), self.arrays, self.kart_vector, self.rule_vector, self.ray_angles)
-
-    def _world_arrays(self) -> WorldArrays:
-        return WorldArrays(
-            self.fstate,
-            self.istate,
-            self.rstate,
-            self.pair_flags,
-            self.target_lane,
-            self.target_speed,
-            self.ray_dist,
-            self.ray_hit,
-            self.pass_start,
-        )
+            sense_batch(
+                self.fstate,
+                self.istate,
+                self.ray_dist,
+                self.ray_hit,
+                self.arrays,
+                self.kart_vector,
+                self.rule_vector,
+                self.ray_angles,
+            )
 
     # ------------------------------------------------------------------ stepping
     def step(self, actions: np.ndarray | None = None, n_steps: int = 1) -> None:
@@ -261,7 +256,15 @@ class World:
         if actions.shape != (self.n_races, self.n_karts, 2):
             raise ValueError(f"actions must have shape {(self.n_races, self.n_karts, 2)}, got {actions.shape}")
         step_batch(
-            self._world_arrays(),
+            self.fstate,
+            self.istate,
+            self.rstate,
+            self.pair_flags,
+            self.target_lane,
+            self.target_speed,
+            self.ray_dist,
+            self.ray_hit,
+            self.pass_start,
             actions,
             self.arrays,
             self.kart_vector,

@@ -107,14 +107,14 @@ def test_hovering_around_a_lane_boundary_changes_nothing(wobble: list[float]) ->
     midpoint = 0.5 * (offsets[0] + offsets[1])
     for current in (1, 2):
         for w in wobble:
-            assert lane_with_hysteresis(offsets, midpoint + w, current, 0.25) == current
+            assert lane_with_hysteresis(offsets[None, :], 0, midpoint + w, current, 0.25) == current
 
 
 def test_crossing_the_hysteresis_band_changes_lane() -> None:
     offsets = np.array([3.5, 1.25, -1.25, -3.5])
-    assert lane_with_hysteresis(offsets, 2.375 + 0.26, 2, 0.25) == 1
-    assert lane_with_hysteresis(offsets, 2.375 - 0.26, 1, 0.25) == 2
-    assert lane_with_hysteresis(offsets, -3.0, 2, 0.25) == 4  # two lanes in one step counts both (see the rule)
+    assert lane_with_hysteresis(offsets[None, :], 0, 2.375 + 0.26, 2, 0.25) == 1
+    assert lane_with_hysteresis(offsets[None, :], 0, 2.375 - 0.26, 1, 0.25) == 2
+    assert lane_with_hysteresis(offsets[None, :], 0, -3.0, 2, 0.25) == 4  # two lanes at once: both count
 
 
 # ---------------------------------------------------------------------------------------------- faults
