@@ -135,6 +135,32 @@ class KartDriver:
             raise ValueError(f"non-finite action ({steer}, {throttle})")
         return steer, throttle
 
+    def take_human_input(self, now: float, speed: float, timeout: float) -> None:
+        """Hold the newest input received (``now``: ``time.monotonic()``); after ``timeout`` [s] of silence brake
+        from ``speed`` [m/s], holding the steer."""
+        received = self.input
+        if received is None or self.input_at is None or now - self.input_at > timeout:
+            self.throttle = brake_throttle(speed)
+            self.braking = True
+            return
+        self.steer, self.throttle, self.applied_seq = received
+        self.braking = False
+
+    def take_ai_input(self, latest: tuple[int, float, float] | None, step: int, speed: float, hold_s: float) -> None:
+        """Hold the controller's newest answer ``latest`` (observation step, steer, throttle) at race step
+        ``step``, counting a missed deadline when the last observation handed over has no answer yet; brake from
+        ``speed`` [m/s] when disabled, not ready, or without a fresh input for ``hold_s`` [s] of race time."""
+        if latest is not None and latest[0] > self.fresh_step:
+            self.fresh_step, self.steer, self.throttle = latest
+        if self.submitted_step > self.fresh_step:
+            self.missed += 1
+        hold_ticks = max(round(hold_s / DT), 2 * self.every)
+        if self.disabled or not self.ready or step - self.fresh_step > hold_ticks:
+            self.throttle = brake_throttle(speed)
+            self.braking = True
+        else:
+            self.braking = False
+
     def record_error(self, what: str, *, traceback: bool = True) -> None:
         """Remember the latest fault's description (the first one is also logged, with the traceback of the
         exception being handled when ``traceback``)."""

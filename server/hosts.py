@@ -4,9 +4,10 @@ Trackers running in threads of the server process take its GIL for about half a 
 with many races the event loop then waits for the GIL before its ticks. A host is one spawned process that
 runs the controllers of many karts (from any races), each in its own :class:`~server.drivers.DriverThread`
 there, so a slow or hung controller delays no other kart. Per kart, the server sends the newest observation
-(newest wins: nothing queues behind a slow controller) and gets back ``(step, steer, throttle)``; plans from
-the planner workers are forwarded to the host's copy of the controller. One thread per host in the server
-process does all the talking, so the tick task never blocks on a pipe.
+(newest wins: nothing queues behind a slow controller) and gets back its inputs; plans from the planner
+workers are forwarded to the host's copy of the controller (every message is a dataclass of
+:mod:`server.host_messages`). One thread per host in the server process does all the talking, so the tick task
+never blocks on a pipe.
 
 A kart whose answer is overdue is hung: the tick task retires it (its thread in the host is abandoned). A host
 that dies is restarted and its karts are built and reset again.

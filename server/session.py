@@ -30,7 +30,7 @@ from controllers.plan import Plan
 from server.broadcast import Broadcast
 from server.controller_params import build_controller
 from server.db import utc_now
-from server.drivers import DriverThread, KartDriver, KartWorker, brake_throttle
+from server.drivers import DriverThread, KartDriver, KartWorker
 from server.frames import ReplayRecorder, TelemetryMessage, build_frame
 from server.host_messages import PlannerSetup
 from server.plan_requests import PlanRequests
@@ -285,11 +285,14 @@ class RaceSession:
         step = int(world.steps[0])
         speeds = world.fstate[0, :, st.F_SPEED]
         now = time.monotonic()
+        settings = self.settings
         for d in self.drivers:
             if d.human:
-                self._human_input(d, now, float(speeds[d.index]))
+                d.take_human_input(now, float(speeds[d.index]), settings.drive_timeout_s)
             else:
-                self._ai_input(d, step, float(speeds[d.index]))
+                worker = self._workers.get(d.index)
+                latest = worker.latest if worker is not None else None
+                d.take_ai_input(latest, step, float(speeds[d.index]), settings.controller_hold_s)
             self._actions[0, d.index] = (d.steer, d.throttle)
         world.step(self._actions)
         observations = observe(world, 0)
@@ -297,29 +300,6 @@ class RaceSession:
         self._plans.request(self.drivers, observations)
         self.replay.record(world, self._actions[0])
         self._publish()
-
-    def _human_input(self, d: KartDriver, now: float, speed: float) -> None:
-        received = d.input
-        if received is None or d.input_at is None or now - d.input_at > self.settings.drive_timeout_s:
-            d.throttle = brake_throttle(speed)  # a silent driver brakes, holding the steer
-            d.braking = True
-            return
-        d.steer, d.throttle, d.applied_seq = received
-        d.braking = False
-
-    def _ai_input(self, d: KartDriver, step: int, speed: float) -> None:
-        worker = self._workers.get(d.index)
-        out = worker.latest if worker is not None else None
-        if out is not None and out[0] > d.fresh_step:
-            d.fresh_step, d.steer, d.throttle = out
-        if d.submitted_step > d.fresh_step:
-            d.missed += 1
-        hold_ticks = max(round(self.settings.controller_hold_s / DT), 2 * d.every)
-        if d.disabled or not d.ready or step - d.fresh_step > hold_ticks:
-            d.throttle = brake_throttle(speed)
-            d.braking = True
-        else:
-            d.braking = False
 
     def _submit(self, observations: Sequence[Observation]) -> None:
         assert self.world is not None
