@@ -9,8 +9,10 @@ from __future__ import annotations
 import asyncio
 import logging
 import socket
+import sys
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import httpx
@@ -235,6 +237,16 @@ def test_update_never_raises_and_close_is_idempotent(caplog: pytest.LogCaptureFi
     assert scene.closed
     with socket.socket() as s:  # the port is free again
         s.bind(("127.0.0.1", port))
+
+
+def test_scenes_started_at_once_leave_stdout_alone() -> None:
+    track = get_track("oval")
+    stdout = sys.stdout
+    with ThreadPoolExecutor(4) as pool:
+        scenes = list(pool.map(lambda i: RaceScene(track, [("A", "human")], f"at once {i}"), range(4)))
+    for scene in scenes:
+        scene.close()
+    assert sys.stdout is stdout
 
 
 def test_hud_shows_standings_and_escapes_names() -> None:

@@ -47,6 +47,9 @@ FOLLOW_BEHIND = 11.0  # [m] follow camera distance behind the kart
 FOLLOW_ABOVE = 5.0  # [m] follow camera height
 FOLLOW_AHEAD = 6.0  # [m] the follow camera looks this far ahead of the kart
 FREE_CAMERA = "Free camera"
+# contextlib.redirect_stdout swaps the process-wide sys.stdout; races start their scenes in threads at once, and
+# unserialised swaps could leave sys.stdout pointing at one scene's buffer for good
+_STDOUT_SWAP = threading.Lock()
 
 
 class _PoseWriter:
@@ -125,7 +128,7 @@ class RaceScene:
         self._viewers_lock = threading.Lock()
 
         # viser prints a banner to stdout on start even when not verbose; keep the server's output clean
-        with contextlib.redirect_stdout(io.StringIO()):
+        with _STDOUT_SWAP, contextlib.redirect_stdout(io.StringIO()):
             self.server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False, label=label)
         log.debug("race viewer %s: viser on 127.0.0.1:%d", label, self.server.get_port())
         try:
