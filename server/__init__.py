@@ -1,4 +1,6 @@
-"""The race server: FastAPI app (:mod:`server.app`), races stepped at 50 Hz (:mod:`server.session`), their
-drivers (:mod:`server.drivers`, :mod:`server.hosts`), planner workers (:mod:`server.planning`), the REST API
-and websockets (:mod:`server.api`, :mod:`server.ws`, messages in :mod:`server.models`), storage
-(:mod:`server.db`) and settings (:mod:`server.settings`)."""
+"""The race server: FastAPI app (:mod:`server.app`), races stepped at 50 Hz (:mod:`server.session`, their frames
+and replays in :mod:`server.frames`, their results in :mod:`server.results`), their drivers
+(:mod:`server.drivers`, :mod:`server.hosts`), planner workers (:mod:`server.planning`,
+:mod:`server.plan_requests`), the REST API and websockets (:mod:`server.routes`, answers built in
+:mod:`server.views`, messages in :mod:`server.models` and, to worker processes, :mod:`server.host_messages`),
+storage (:mod:`server.db`) and settings (:mod:`server.settings`)."""

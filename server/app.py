@@ -15,15 +15,16 @@ from contextlib import asynccontextmanager
 from fastapi import APIRouter, FastAPI
 
 from controllers.registry import REGISTRY, ControllerSpec
-from server import api, ws
 from server.db import RaceDatabase
-from server.drivers import HUMAN, KartDriver
 from server.hosts import ControllerHosts
 from server.live import LiveRaces
 from server.loop import make_ordinary, make_realtime
 from server.planning import PlannerPool
-from server.session import SceneFactory
+from server.race_config import HUMAN
+from server.routes import api_router
+from server.services import RaceServices, SceneFactory
 from server.settings import Settings
+from server.warmup import warm_tick_path
 
 log = logging.getLogger(__name__)
 
@@ -31,7 +32,8 @@ DESCRIPTION = """Head-to-head kart races between registered controllers and peop
 
 * REST under `/api` (this page).
 * Websockets: `/api/races/{id}/drive?kart=K&token=T` (drive a human kart) and `/api/races/{id}/telemetry`
-  (the race's frames at about 25 Hz); their messages are described in `server/ws.py`.
+  (the race's frames at about 25 Hz); their messages are described in `server/routes/drive.py` and
+  `server/routes/telemetry.py`.
 * The 3D view of a race: `/races/{id}/viewer/`.
 """
 
@@ -55,31 +57,6 @@ def _web_router(races: Callable[[], LiveRaces]) -> APIRouter | None:
         return None
     router: APIRouter = make_web_router(lambda race_id: races().scene_port(race_id))
     return router
-
-
-def warm_tick_path(catalogue: Mapping[str, ControllerSpec]) -> None:
-    """Load the compiled kernels the tick uses (world step, sensors, and the trackers of ``catalogue`` when they
-    run in this process) before the first race."""
-    from controllers.base import RaceContext
-    from sim_core.observation import observe
-    from sim_core.params import SimParams
-    from sim_core.track_io import get_track
-    from sim_core.world import World
-
-    track = get_track("oval")
-    params = SimParams()
-    world = World(track, 1, 2, params, laps=1)
-    world.step()
-    observation = observe(world, 0)[0]
-    for name, spec in catalogue.items():
-        if REGISTRY.get(name) is not spec:
-            continue  # only the public registry's controllers are known to be safe to try here
-        driver = KartDriver(0, name, name, spec.factory(), None)
-        try:
-            driver.reset(RaceContext(track, params.kart, 0, 2, world.lane_change_limit, 0))
-            driver.compute(observation)
-        except Exception:
-            log.exception("warming up %s failed", name)
 
 
 def create_app(settings: Settings | None = None, *, controllers: Mapping[str, ControllerSpec] | None = None) -> FastAPI:
@@ -106,12 +83,12 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
             log.warning("%d race(s) left running by a previous server marked aborted", aborted)
         pool = PlannerPool(settings.plan_workers)
         hosts = ControllerHosts(settings.controller_hosts) if settings.controller_hosts else None
-        races = LiveRaces(settings, catalogue, pool, hosts, db, scene_factory)
+        races = LiveRaces(RaceServices(settings, catalogue, pool, hosts, db, scene_factory))
         app.state.races = races
+        # trackers run in this process only without hosts; only the public registry's are known safe to try here
+        in_process = [s for name, s in catalogue.items() if hosts is None and REGISTRY.get(name) is s]
         try:
-            await asyncio.gather(
-                pool.wait_warm(), asyncio.to_thread(warm_tick_path, catalogue if hosts is None else {})
-            )
+            await asyncio.gather(pool.wait_warm(), asyncio.to_thread(warm_tick_path, in_process))
             # what start-up built (modules, compiled kernels, tables) lives as long as the process: keep it out
             # of the collector's full passes, which would otherwise stall the ticks for tens of milliseconds
             gc.collect()
@@ -128,8 +105,7 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
 
     app = FastAPI(title="HeadToHead Karting", description=DESCRIPTION, version="0.1.0", lifespan=lifespan)
     app.state.settings = settings
-    app.include_router(api.router)
-    app.include_router(ws.router)
+    app.include_router(api_router)
     web = _web_router(lambda: app.state.races)
     if web is not None:
         app.include_router(web)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 import zlib
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from datetime import UTC, datetime
 from typing import Any
 
@@ -16,7 +16,12 @@ from sqlalchemy import JSON, DateTime, Float, Integer, LargeBinary, String, crea
 from sqlalchemy.engine import Engine
 from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
 
-LIVE_STATUSES = ("starting", "waiting", "running")
+from server.race_config import KartEntry
+from server.results import DriverFaults, RaceRecord
+from server.snapshot import DriverState, RaceSnapshot, Standing
+from server.status import LIVE_STATUSES, RaceStatus
+from server.ticks import TickSummary
+from sim_core.params import DT
 
 
 class _Base(DeclarativeBase):
@@ -35,11 +40,11 @@ class RaceRow(_Base):
     laps: Mapped[int] = mapped_column(Integer)
     seed: Mapped[int] = mapped_column(Integer)
     kart_preset: Mapped[str] = mapped_column(String(32))
-    karts: Mapped[list[dict[str, Any]]] = mapped_column(JSON)  # [{index, name, controller}]
+    karts: Mapped[list[dict[str, Any]]] = mapped_column(JSON)  # [KartEntry.to_json()]
     start_lanes: Mapped[list[int] | None] = mapped_column(JSON, nullable=True)
     duration: Mapped[float | None] = mapped_column(Float, nullable=True)  # [s] race time
-    result: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
-    tick_stats: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)
+    result: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)  # RaceRecord.to_json()
+    tick_stats: Mapped[dict[str, Any] | None] = mapped_column(JSON, nullable=True)  # TickSummary
     replay: Mapped[bytes | None] = mapped_column(LargeBinary, nullable=True)  # zlib(JSON)
 
 
@@ -49,32 +54,60 @@ class StoredRace:
 
     id: str
     created_at: datetime
-    status: str
+    status: RaceStatus
     track: str
     laps: int
     seed: int
     kart_preset: str
-    karts: list[dict[str, Any]]
+    karts: list[KartEntry]
     start_lanes: list[int] | None
     duration: float | None
-    result: dict[str, Any] | None
-    tick_stats: dict[str, Any] | None
+    result: RaceRecord | None
+    tick_stats: TickSummary | None
+
+    def snapshot(self) -> RaceSnapshot:
+        """The race as the API shows it: its result's standings and faults (a human kart's driver is gone)."""
+        record = self.result
+        standings = sorted(record.karts, key=lambda k: k.referee.position) if record is not None else []
+        drivers = []
+        for kart in self.karts:
+            kart_record = record.kart(kart.index) if record is not None else None
+            faults = kart_record.faults if kart_record is not None else DriverFaults()
+            drivers.append(DriverState(kart, faults, False, False if kart.human else None))
+        return RaceSnapshot(
+            id=self.id,
+            created_at=self.created_at,
+            status=self.status,
+            track=self.track,
+            laps=self.laps,
+            seed=self.seed,
+            kart_preset=self.kart_preset,
+            start_lanes=tuple(self.start_lanes) if self.start_lanes is not None else None,
+            karts=tuple(self.karts),
+            time=self.duration or 0.0,
+            step=round((self.duration or 0.0) / DT),
+            standings=tuple(Standing.from_record(k, self.laps) for k in standings),
+            drivers=tuple(drivers),
+            tick_stats=self.tick_stats,
+            winner=record.winner if record is not None else None,
+            error=None,
+        )
 
 
 def _stored(row: RaceRow) -> StoredRace:
     return StoredRace(
         row.id,
         row.created_at if row.created_at.tzinfo else row.created_at.replace(tzinfo=UTC),  # SQLite drops the zone
-        row.status,
+        RaceStatus(row.status),
         row.track,
         row.laps,
         row.seed,
         row.kart_preset,
-        list(row.karts),
+        [KartEntry.from_json(kart) for kart in row.karts],
         row.start_lanes,
         row.duration,
-        row.result,
-        row.tick_stats,
+        RaceRecord.from_json(row.result) if row.result is not None else None,
+        TickSummary(**row.tick_stats) if row.tick_stats else None,
     )
 
 
@@ -95,7 +128,9 @@ class RaceDatabase:
     def abort_unfinished(self) -> int:
         """Mark races left live by a previous server process as ``aborted``; returns how many."""
         with Session(self.engine) as session, session.begin():
-            done = session.execute(update(RaceRow).where(RaceRow.status.in_(LIVE_STATUSES)).values(status="aborted"))
+            live = [status.value for status in LIVE_STATUSES]
+            aborted = RaceStatus.ABORTED.value
+            done = session.execute(update(RaceRow).where(RaceRow.status.in_(live)).values(status=aborted))
             return int(done.rowcount)  # type: ignore[attr-defined]
 
     def add(self, race: StoredRace) -> None:
@@ -105,37 +140,29 @@ class RaceDatabase:
                 RaceRow(
                     id=race.id,
                     created_at=race.created_at,
-                    status=race.status,
+                    status=RaceStatus(race.status).value,
                     track=race.track,
                     laps=race.laps,
                     seed=race.seed,
                     kart_preset=race.kart_preset,
-                    karts=race.karts,
+                    karts=[kart.to_json() for kart in race.karts],
                     start_lanes=race.start_lanes,
                 )
             )
 
-    def set_status(self, race_id: str, status: str) -> None:
+    def set_status(self, race_id: str, status: RaceStatus) -> None:
         """Change a race's status."""
         with Session(self.engine) as session, session.begin():
-            session.execute(update(RaceRow).where(RaceRow.id == race_id).values(status=status))
+            session.execute(update(RaceRow).where(RaceRow.id == race_id).values(status=RaceStatus(status).value))
 
-    def finish(
-        self,
-        race_id: str,
-        status: str,
-        duration: float,
-        result: dict[str, Any],
-        tick_stats: dict[str, Any],
-        replay: dict[str, Any],
-    ) -> None:
+    def finish(self, race_id: str, result: RaceRecord, tick_stats: TickSummary | None, replay: dict[str, Any]) -> None:
         """Store the end of a race: final status, result, tick statistics and replay."""
         blob = zlib.compress(json.dumps(replay, separators=(",", ":")).encode(), 6)
+        ticks = asdict(tick_stats) if tick_stats is not None else {}
+        values = {"status": result.status.value, "duration": result.duration, "result": result.to_json()}
         with Session(self.engine) as session, session.begin():
             session.execute(
-                update(RaceRow)
-                .where(RaceRow.id == race_id)
-                .values(status=status, duration=duration, result=result, tick_stats=tick_stats, replay=blob)
+                update(RaceRow).where(RaceRow.id == race_id).values(**values, tick_stats=ticks, replay=blob)
             )
 
     def get(self, race_id: str) -> StoredRace | None:

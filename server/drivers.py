@@ -15,18 +15,19 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import Protocol, runtime_checkable
 
-from controllers.base import Controller, RaceContext
-from controllers.hierarchical import HierarchicalController
+from controllers.base import Controller, PlanningDriver, RaceContext, Tracker
 from controllers.plan import Plan
+from server.host_messages import ActionOut, Error, Failed, FromHost, Ready
 from server.loop import step_below_realtime
+from server.race_config import KartEntry
+from server.results import DriverFaults
 from sim_core.observation import Observation
 from sim_core.params import DT
 
 log = logging.getLogger(__name__)
 
-HUMAN = "human"  # the controller name of a kart driven over the drive websocket
 BRAKE_DEADBAND = 0.05  # [m/s] below this speed "brake" means no pedal (a held brake reverses from standstill)
 
 
@@ -39,22 +40,34 @@ def brake_throttle(speed: float) -> float:
     return 0.0
 
 
+@runtime_checkable
+class SeparateTracker(Protocol):
+    """A planning driver whose tracker can be reset on its own (``HierarchicalController.tracker``).
+
+    The live server's planner runs in a planner worker, so the tick side resets only the tracker; a planning
+    driver without this capability is reset whole (its planner's reset is then wasted work, not wrong).
+    """
+
+    tracker: Tracker
+
+
 class KartDriver:
     """One kart's driver in a live race, its held inputs and its fault record.
 
     Counters are written by one side each (``exceptions`` by the controller's worker, the rest by the tick
-    task), so no lock is needed.
+    task), so no lock is needed. The server asks what the controller can do once, here: :attr:`planning` is
+    the controller when it plans off the tick (:class:`~controllers.base.PlanningDriver`), else ``None``.
     """
 
-    def __init__(
-        self, index: int, name: str, controller_name: str, controller: Controller | None, token: str | None
-    ) -> None:
-        self.index = index
-        self.name = name
-        self.controller_name = controller_name
+    def __init__(self, entry: KartEntry, controller: Controller | None, token: str | None = None) -> None:
+        self.entry = entry
+        self.index = entry.index
+        self.name = entry.name
+        self.controller_name = entry.controller
+        self.human = entry.human  # a person (or a client program) drives this kart over the websocket
         self.controller = controller
+        self.planning: PlanningDriver | None = controller if isinstance(controller, PlanningDriver) else None
         self.token = token
-        self.hierarchical = isinstance(controller, HierarchicalController)
         rate = controller.rate_hz if controller is not None else 1.0 / DT
         self.every = max(1, round(1.0 / (DT * rate)))  # decide every this many ticks
         # AI side
@@ -81,39 +94,72 @@ class KartDriver:
         self.applied_seq: int | None = None  # seq of the input applied at the last tick
 
     @property
-    def human(self) -> bool:
-        """Whether a person (or a client program) drives this kart over the websocket."""
-        return self.controller_name == HUMAN
-
-    @property
     def faults(self) -> int:
         """Exceptions, hangs, missed deadlines and failed plans of this kart's controller."""
         return self.exceptions + self.hangs + self.missed + self.planner_faults
 
     @property
     def plans_applied(self) -> int:
-        """Plans its hierarchical controller has received (0 for other controllers)."""
-        return self.controller.plans_applied if isinstance(self.controller, HierarchicalController) else 0
+        """Plans its planning driver has received (0 for other controllers)."""
+        return self.planning.plans_applied if self.planning is not None else 0
+
+    def fault_record(self) -> DriverFaults:
+        """Its faults so far, as a record."""
+        return DriverFaults(
+            exceptions=self.exceptions,
+            hangs=self.hangs,
+            missed_deadlines=self.missed,
+            planner_faults=self.planner_faults,
+            plans_applied=self.plans_applied,
+            disabled=self.disabled,
+            last_error=self.last_error,
+        )
 
     def reset(self, context: RaceContext) -> None:
-        """Prepare the controller for the race (hierarchical ones: the tracker only; planners live in workers)."""
+        """Prepare the controller for the race (planning drivers: the tracking side; planners live in workers)."""
         assert self.controller is not None
-        if isinstance(self.controller, HierarchicalController):
-            self.controller.tracker.reset(context)
+        if isinstance(self.planning, SeparateTracker):
+            self.planning.tracker.reset(context)
         else:
             self.controller.reset(context)
 
     def compute(self, observation: Observation) -> tuple[float, float]:
         """The controller's inputs for ``observation`` (raises what the controller raises)."""
-        assert self.controller is not None
-        if isinstance(self.controller, HierarchicalController):
-            action = self.controller.track(observation)
+        if self.planning is not None:
+            action = self.planning.track(observation)
         else:
+            assert self.controller is not None
             action = self.controller.act(observation)
         steer, throttle = float(action.steer), float(action.throttle)
         if not (math.isfinite(steer) and math.isfinite(throttle)):
             raise ValueError(f"non-finite action ({steer}, {throttle})")
         return steer, throttle
+
+    def take_human_input(self, now: float, speed: float, timeout: float) -> None:
+        """Hold the newest input received (``now``: ``time.monotonic()``); after ``timeout`` [s] of silence brake
+        from ``speed`` [m/s], holding the steer."""
+        received = self.input
+        if received is None or self.input_at is None or now - self.input_at > timeout:
+            self.throttle = brake_throttle(speed)
+            self.braking = True
+            return
+        self.steer, self.throttle, self.applied_seq = received
+        self.braking = False
+
+    def take_ai_input(self, latest: tuple[int, float, float] | None, step: int, speed: float, hold_s: float) -> None:
+        """Hold the controller's newest answer ``latest`` (observation step, steer, throttle) at race step
+        ``step``, counting a missed deadline when the last observation handed over has no answer yet; brake from
+        ``speed`` [m/s] when disabled, not ready, or without a fresh input for ``hold_s`` [s] of race time."""
+        if latest is not None and latest[0] > self.fresh_step:
+            self.fresh_step, self.steer, self.throttle = latest
+        if self.submitted_step > self.fresh_step:
+            self.missed += 1
+        hold_ticks = max(round(hold_s / DT), 2 * self.every)
+        if self.disabled or not self.ready or step - self.fresh_step > hold_ticks:
+            self.throttle = brake_throttle(speed)
+            self.braking = True
+        else:
+            self.braking = False
 
     def record_error(self, what: str, *, traceback: bool = True) -> None:
         """Remember the latest fault's description (the first one is also logged, with the traceback of the
@@ -151,8 +197,8 @@ class DriverThread:
     :meth:`submit` never blocks (the newest observation replaces one not yet taken); the answer lands in
     :attr:`latest` as ``(observation step, steer, throttle)``. :attr:`busy_since` tells since when a call has
     been running, so the tick task can declare it hung and :meth:`retire` the thread. One thread per kart: a
-    controller that hangs delays no other kart. ``report`` (in controller hosts) also gets every outcome:
-    ``("ready",)``, ``("failed", what)`` (reset), ``("action", step, steer, throttle)``, ``("error", what)``.
+    controller that hangs delays no other kart. ``report`` (in controller hosts) also gets every outcome as a
+    host message for kart ``kart`` (:class:`~server.host_messages.Ready`, ``Failed``, ``ActionOut``, ``Error``).
     """
 
     def __init__(
@@ -160,11 +206,13 @@ class DriverThread:
         driver: KartDriver,
         context: RaceContext,
         name: str,
-        report: Callable[[tuple[Any, ...]], None] | None = None,
+        report: Callable[[FromHost], None] | None = None,
+        kart: int = -1,
     ) -> None:
         self.driver = driver
         self._context = context
         self._report = report or (lambda event: None)
+        self._kart = kart
         self._job: tuple[int, Observation] | None = None
         self._lock = threading.Lock()
         self._wake = threading.Event()
@@ -198,10 +246,10 @@ class DriverThread:
             driver.exceptions += 1
             driver.disabled = True
             driver.record_error(f"reset raised {type(exc).__name__}: {exc}")
-            self._report(("failed", driver.last_error))
+            self._report(Failed(self._kart, driver.last_error or "reset failed"))
         else:
             driver.ready = not self.retired
-            self._report(("ready",))
+            self._report(Ready(self._kart))
         self.busy_since = None
 
     def _run(self) -> None:
@@ -226,10 +274,10 @@ class DriverThread:
                 driver.exceptions += 1
                 what = f"act raised {type(exc).__name__}: {exc}"
                 driver.record_error(what)
-                self._report(("error", what))
+                self._report(Error(self._kart, what))
             else:
                 result = (step, steer, throttle)
             self.busy_since = None
             if result is not None and not self.retired:  # a hung call that came back is not used
                 self.latest = result
-                self._report(("action", *result))
+                self._report(ActionOut(self._kart, *result))

@@ -4,9 +4,10 @@ Trackers running in threads of the server process take its GIL for about half a 
 with many races the event loop then waits for the GIL before its ticks. A host is one spawned process that
 runs the controllers of many karts (from any races), each in its own :class:`~server.drivers.DriverThread`
 there, so a slow or hung controller delays no other kart. Per kart, the server sends the newest observation
-(newest wins: nothing queues behind a slow controller) and gets back ``(step, steer, throttle)``; plans from
-the planner workers are forwarded to the host's copy of the controller. One thread per host in the server
-process does all the talking, so the tick task never blocks on a pipe.
+(newest wins: nothing queues behind a slow controller) and gets back its inputs; plans from the planner
+workers are forwarded to the host's copy of the controller (every message is a dataclass of
+:mod:`server.host_messages`). One thread per host in the server process does all the talking, so the tick task
+never blocks on a pipe.
 
 A kart whose answer is overdue is hung: the tick task retires it (its thread in the host is abandoned). A host
 that dies is restarted and its karts are built and reset again.
@@ -24,13 +25,27 @@ import threading
 import time
 from collections.abc import Callable
 from multiprocessing.connection import Connection, wait
-from typing import Any
 
 from controllers.base import Controller, RaceContext
-from controllers.hierarchical import HierarchicalController
 from controllers.plan import Plan
+from server.controller_params import build_controller
 from server.drivers import DriverThread, KartDriver
+from server.host_messages import (
+    Act,
+    ActionOut,
+    Close,
+    DeliverPlan,
+    Error,
+    Failed,
+    FromHost,
+    Open,
+    Ready,
+    Stop,
+    ToHost,
+)
 from server.loop import step_below_realtime
+from server.race_config import KartEntry
+from server.warmup import warm_drivers
 from sim_core.observation import Observation
 
 log = logging.getLogger(__name__)
@@ -42,62 +57,41 @@ def _host_main(conn: Connection) -> None:
     send_lock = threading.Lock()
     threads: dict[int, DriverThread] = {}
 
-    def reporter(kart: int) -> Callable[[tuple[Any, ...]], None]:
-        def report(event: tuple[Any, ...]) -> None:
-            with send_lock, contextlib.suppress(OSError, ValueError):
-                conn.send((event[0], kart, *event[1:]))
-
-        return report
+    def report(event: FromHost) -> None:
+        with send_lock, contextlib.suppress(OSError, ValueError):
+            conn.send(event)
 
     while True:
         try:
-            message = conn.recv()
+            message: ToHost = conn.recv()
         except (EOFError, OSError):
             return  # the server went away
-        kind, kart = message[0], message[1]
-        if kind == "open":
-            _, _, name, factory, context = message
-            try:
-                controller = factory()
-            except Exception as exc:
-                reporter(kart)(("failed", f"construction raised {type(exc).__name__}: {exc}"))
-                continue
-            driver = KartDriver(context.ego, name, name, controller, None)
-            threads[kart] = DriverThread(driver, context, f"kart-{kart}", reporter(kart))
-        elif kind == "act" and kart in threads:
-            threads[kart].submit(*message[2])
-        elif kind == "plan" and kart in threads:
-            controller = threads[kart].driver.controller
-            if isinstance(controller, HierarchicalController):
-                controller.deliver(message[2])
-        elif kind == "close" and kart in threads:
-            threads.pop(kart).retire()
-        elif kind == "stop":
-            return
-
-
-def _host_warm() -> None:
-    """Load the compiled kernels the registered controllers use, before the first race."""
-    from controllers.registry import REGISTRY
-    from sim_core.observation import observe
-    from sim_core.params import SimParams
-    from sim_core.track_io import get_track
-    from sim_core.world import World
-
-    track = get_track("oval")
-    params = SimParams()
-    world = World(track, 1, 2, params, laps=1)
-    observation = observe(world, 0)[0]
-    for spec in REGISTRY.values():
-        driver = KartDriver(0, spec.name, spec.name, spec.factory(), None)
-        with contextlib.suppress(Exception):
-            driver.reset(RaceContext(track, params.kart, 0, 2, world.lane_change_limit, 0))
-            driver.compute(observation)
+        match message:
+            case Act(kart, step, observation) if kart in threads:
+                threads[kart].submit(step, observation)
+            case Open(kart, controller_name, factory, context):
+                try:
+                    controller = build_controller(factory)
+                except Exception as exc:
+                    report(Failed(kart, f"construction raised {type(exc).__name__}: {exc}"))
+                    continue
+                driver = KartDriver(KartEntry(context.ego, controller_name, controller_name), controller)
+                threads[kart] = DriverThread(driver, context, f"kart-{kart}", report, kart)
+            case DeliverPlan(kart, plan) if kart in threads:
+                planning = threads[kart].driver.planning
+                if planning is not None:
+                    planning.deliver(plan)
+            case Close(kart) if kart in threads:
+                threads.pop(kart).retire()
+            case Stop():
+                return
 
 
 def _host_entry(conn: Connection) -> None:
     step_below_realtime()
-    _host_warm()
+    from controllers.registry import REGISTRY
+
+    warm_drivers(REGISTRY.values())  # load the compiled kernels the registered controllers use
     _host_main(conn)
 
 
@@ -131,11 +125,11 @@ class HostedKart:
         """Hand over the kart's observation of race step ``step`` (newest wins)."""
         if self.waiting_since is None:
             self.waiting_since = time.monotonic()
-        self.host.send_act(self.kart_id, (step, observation))
+        self.host.send_act(Act(self.kart_id, step, observation))
 
     def deliver(self, plan: Plan) -> None:
         """Forward a plan to the host's copy of the controller."""
-        self.host.send(("plan", self.kart_id, plan))
+        self.host.send(DeliverPlan(self.kart_id, plan))
 
     def retire(self) -> None:
         """Stop using this kart's controller (its thread in the host is abandoned)."""
@@ -145,28 +139,27 @@ class HostedKart:
         """Build and reset the controller (again) in the host."""
         self.resetting = True
         self.waiting_since = time.monotonic()
-        self.host.send(("open", self.kart_id, self.driver.controller_name, self.factory, self.context))
+        name = self.driver.controller_name
+        self.host.send(Open(self.kart_id, name, self.factory, self.context))
 
-    def outcome(self, kind: str, args: tuple[Any, ...]) -> None:
+    def outcome(self, event: FromHost) -> None:
         """An event from the host (on the host's pump thread)."""
         driver = self.driver
-        if kind == "action":
-            self.latest = (args[0], args[1], args[2])
-            self.waiting_since = None
-        elif kind == "ready":
-            driver.ready = True
-            self.resetting = False
-            self.waiting_since = None
-        elif kind == "failed":
-            driver.exceptions += 1
-            driver.disabled = True
-            driver.record_error(args[0], traceback=False)
-            self.resetting = False
-            self.waiting_since = None
-        elif kind == "error":
-            driver.exceptions += 1
-            driver.record_error(args[0], traceback=False)
-            self.waiting_since = None
+        match event:
+            case ActionOut(_, step, steer, throttle):
+                self.latest = (step, steer, throttle)
+            case Ready():
+                driver.ready = True
+                self.resetting = False
+            case Failed(_, error):
+                driver.exceptions += 1
+                driver.disabled = True
+                driver.record_error(error, traceback=False)
+                self.resetting = False
+            case Error(_, error):
+                driver.exceptions += 1
+                driver.record_error(error, traceback=False)
+        self.waiting_since = None
 
 
 class ControllerHost:
@@ -176,8 +169,8 @@ class ControllerHost:
         self.name = name
         self._karts: dict[int, HostedKart] = {}
         self._lock = threading.Lock()
-        self._control: list[tuple[Any, ...]] = []
-        self._acts: dict[int, tuple[int, Observation]] = {}
+        self._control: list[ToHost] = []
+        self._acts: dict[int, Act] = {}
         self.restarts = 0
         self._start()
 
@@ -201,7 +194,11 @@ class ControllerHost:
         return len(self._karts)
 
     def attach(
-        self, kart_id: int, driver: KartDriver, factory: Callable[[], Controller], context: RaceContext
+        self,
+        kart_id: int,
+        driver: KartDriver,
+        factory: Callable[[], Controller],
+        context: RaceContext,
     ) -> HostedKart:
         """Build and reset a kart's controller in the host (outcomes arrive on the handle)."""
         kart = HostedKart(self, kart_id, driver, factory, context)
@@ -212,18 +209,18 @@ class ControllerHost:
     def detach(self, kart_id: int) -> None:
         """Forget a kart."""
         if self._karts.pop(kart_id, None) is not None:
-            self.send(("close", kart_id))
+            self.send(Close(kart_id))
 
-    def send(self, message: tuple[Any, ...]) -> None:
+    def send(self, message: ToHost) -> None:
         """Queue a control message (sent in order, before pending observations)."""
         with self._lock:
             self._control.append(message)
         self._wake()
 
-    def send_act(self, kart_id: int, job: tuple[int, Observation]) -> None:
+    def send_act(self, act: Act) -> None:
         """Queue a kart's newest observation (replacing one not yet sent)."""
         with self._lock:
-            self._acts[kart_id] = job
+            self._acts[act.kart] = act
         self._wake()
 
     def _wake(self) -> None:
@@ -250,7 +247,7 @@ class ControllerHost:
             self.process.kill()
         else:
             with contextlib.suppress(OSError, ValueError):
-                self._conn.send(("stop", -1))
+                self._conn.send(Stop())
         self.process.join(5)
         if self.process.is_alive():
             self.process.kill()
@@ -278,14 +275,14 @@ class ControllerHost:
                         acts, self._acts = self._acts, {}
                     for message in control:
                         conn.send(message)
-                    for kart_id, job in acts.items():
-                        conn.send(("act", kart_id, job))
+                    for act in acts.values():
+                        conn.send(act)
                 if conn in ready:
                     while conn.poll():
-                        kind, kart_id, *args = conn.recv()
-                        kart = self._karts.get(kart_id)
+                        event: FromHost = conn.recv()
+                        kart = self._karts.get(event.kart)
                         if kart is not None:
-                            kart.outcome(kind, tuple(args))
+                            kart.outcome(event)
         except (EOFError, OSError, ValueError):
             if not self._stopping:
                 self.died = True
@@ -298,7 +295,12 @@ class ControllerHosts:
         self.hosts = [ControllerHost(f"controller-host-{i}") for i in range(n)]
         self._next_id = 0
 
-    def attach(self, driver: KartDriver, factory: Callable[[], Controller], context: RaceContext) -> HostedKart:
+    def attach(
+        self,
+        driver: KartDriver,
+        factory: Callable[[], Controller],
+        context: RaceContext,
+    ) -> HostedKart:
         """Run ``driver``'s controller (built by ``factory``) in a host."""
         self._next_id += 1
         host = min(self.hosts, key=lambda h: h.load)

@@ -1,19 +1,15 @@
-"""The races this server process is running, and what they share (settings, planner workers, database)."""
+"""The races this server process is running, and what they share (:class:`~server.services.RaceServices`)."""
 
 from __future__ import annotations
 
 import asyncio
 import logging
 import secrets
-from collections.abc import Mapping
 
-from controllers.registry import ControllerSpec
-from server.db import RaceDatabase, StoredRace
-from server.drivers import HUMAN
-from server.hosts import ControllerHosts
-from server.planning import PlannerPool
-from server.session import RaceConfig, RaceSession, SceneFactory
-from server.settings import Settings
+from server.db import StoredRace
+from server.race_config import RaceConfig
+from server.services import RaceServices
+from server.session import RaceSession
 
 log = logging.getLogger(__name__)
 
@@ -27,21 +23,9 @@ class TooManyRacesError(RuntimeError):
 class LiveRaces:
     """Live races by id (and finished ones for ``keep_finished_s``); starts and ends them."""
 
-    def __init__(
-        self,
-        settings: Settings,
-        catalogue: Mapping[str, ControllerSpec],
-        pool: PlannerPool,
-        hosts: ControllerHosts | None,
-        db: RaceDatabase,
-        scene_factory: SceneFactory | None,
-    ) -> None:
-        self.settings = settings
-        self.hosts = hosts
-        self.catalogue = catalogue
-        self.pool = pool
-        self.db = db
-        self.scene_factory = scene_factory
+    def __init__(self, services: RaceServices) -> None:
+        self.services = services
+        self.settings = services.settings
         self.sessions: dict[str, RaceSession] = {}
 
     def get(self, race_id: str) -> RaceSession | None:
@@ -63,18 +47,8 @@ class LiveRaces:
         if self.live_count() >= self.settings.max_sessions:
             raise TooManyRacesError(f"{self.settings.max_sessions} races are running; try again when one ends")
         race_id = secrets.token_hex(6)
-        tokens = {k: secrets.token_urlsafe(16) for k, kart in enumerate(config.karts) if kart.controller == HUMAN}
-        session = RaceSession(
-            race_id,
-            config,
-            tokens,
-            settings=self.settings,
-            catalogue=self.catalogue,
-            pool=self.pool,
-            hosts=self.hosts,
-            db=self.db,
-            scene_factory=self.scene_factory,
-        )
+        tokens = {kart.index: secrets.token_urlsafe(16) for kart in config.karts if kart.human}
+        session = RaceSession(race_id, config, tokens, self.services)
         stored = StoredRace(
             id=race_id,
             created_at=session.created_at,
@@ -83,13 +57,13 @@ class LiveRaces:
             laps=config.laps,
             seed=config.seed,
             kart_preset=config.kart_preset,
-            karts=session.kart_list(),
+            karts=list(config.karts),
             start_lanes=list(config.start_lanes) if config.start_lanes is not None else None,
             duration=None,
             result=None,
             tick_stats=None,
         )
-        await asyncio.to_thread(self.db.add, stored)
+        await asyncio.to_thread(self.services.db.add, stored)
         self.sessions[race_id] = session
         session.on_closed = self._forget
         session.other_starts = lambda: [

@@ -1,11 +1,22 @@
-"""Every message at the HTTP and websocket edge, as pydantic models (the OpenAPI schema at ``/docs``)."""
+"""Every message at the HTTP and websocket edge, as pydantic models (the OpenAPI schema at ``/docs``).
+
+A kart's result (:class:`KartResultOut`) is derived from the result record (:mod:`server.results`): the
+referee's fields of :class:`sim_core.world.KartResult`, whatever this version has, and the driver's faults.
+"""
 
 from __future__ import annotations
 
+from dataclasses import fields
 from datetime import datetime
-from typing import Literal
+from typing import TYPE_CHECKING, Any, Literal, get_type_hints
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, create_model
+
+from server.race_config import ParamValue
+from server.results import DriverFaults, record_name
+from server.status import RaceStatus
+from sim_core.world import KartResult
+from web.frame import KartFrame
 
 MAX_SEED = 2**31 - 1
 
@@ -37,6 +48,9 @@ class KartIn(BaseModel):
 
     controller: str = Field(min_length=1, max_length=64, description="a name from GET /api/controllers")
     name: str | None = Field(None, min_length=1, max_length=40, description="display name")
+    params: dict[str, ParamValue] = Field(
+        default_factory=dict, description="controller parameters to change (names from GET /api/controllers)"
+    )
 
 
 class RaceIn(BaseModel):
@@ -58,6 +72,7 @@ class KartOut(BaseModel):
     index: int
     name: str
     controller: str
+    params: dict[str, ParamValue] = Field(default_factory=dict, description="controller parameters changed")
 
 
 class CreatedKartOut(KartOut):
@@ -70,7 +85,7 @@ class RaceCreatedOut(BaseModel):
     """The answer to POST /api/races. The drive tokens are shown only here."""
 
     id: str
-    status: str
+    status: RaceStatus
     track: str
     laps: int
     seed: int
@@ -131,7 +146,7 @@ class RaceSummaryOut(BaseModel):
     """A race in a listing."""
 
     id: str
-    status: Literal["starting", "waiting", "running", "finished", "stopped", "aborted"]
+    status: RaceStatus
     track: str
     laps: int
     created_at: datetime
@@ -165,39 +180,50 @@ class TicksOut(BaseModel):
     recent_jitter_ms: list[float]
 
 
-class KartResultOut(BaseModel):
-    """One kart's result (the paper's per-race figures, plus its controller's faults)."""
+_REFEREE_DOCS = {
+    "finish_time": "[s]",
+    "laps": "laps completed",
+    "safety_score": "collisions at fault + illegal lane changes",
+    "delta_r": "[m] mean distance from the planned lane at checkpoints",
+    "delta_v": "[m/s] mean difference from the planned speed at checkpoints",
+}
 
-    index: int
-    name: str
-    controller: str
-    position: int
-    finished: bool
-    finish_time: float | None = Field(description="[s]")
-    laps: int = Field(description="laps completed")
-    checkpoints_passed: int
-    winner: bool
-    collisions_at_fault: int
-    illegal_lane_changes: int
-    safety_score: int = Field(description="collisions at fault + illegal lane changes")
-    wall_hits: int
-    contacts: int
-    buffer_violations: int
-    delta_r: float | None = Field(description="[m] mean distance from the planned lane at checkpoints")
-    delta_v: float | None = Field(description="[m/s] mean difference from the planned speed at checkpoints")
-    controller_faults: int = Field(description="exceptions + hangs + missed deadlines + failed plans")
-    exceptions: int
-    hangs: int
-    missed_deadlines: int
-    planner_faults: int
-    last_error: str | None = None
+
+def _kart_result_fields() -> dict[str, Any]:
+    """``create_model`` fields of a kart's result: identity, the referee's fields (None where a record of an
+    older version lacks one), the faults."""
+    out: dict[str, Any] = {"index": (int, ...), "name": (str, ...), "controller": (str, ...)}
+    hints = get_type_hints(KartResult)
+    for f in fields(KartResult):
+        name = record_name(f.name)
+        if name not in out:
+            out[name] = (hints[f.name] | None, Field(None, description=_REFEREE_DOCS.get(name)))
+    out["winner"] = (bool, ...)
+    hints = get_type_hints(DriverFaults)
+    for f in fields(DriverFaults):
+        out[f.name] = (hints[f.name], f.default)
+    out["controller_faults"] = (int, Field(description="exceptions + hangs + missed deadlines + failed plans"))
+    return out
+
+
+if TYPE_CHECKING:
+
+    class KartResultOut(BaseModel):
+        """One kart's result (fields derived at run time)."""
+
+else:
+    KartResultOut = create_model(
+        "KartResultOut",
+        __doc__="One kart's result: the referee's figures (the paper's per-race figures) and its controller's faults.",
+        **_kart_result_fields(),
+    )
 
 
 class ResultOut(BaseModel):
     """A race's result (final when ``status`` is ``finished``; the state when stopped otherwise)."""
 
     race_id: str
-    status: str
+    status: RaceStatus
     track: str
     laps: int
     duration: float = Field(description="[s] race time")
@@ -213,3 +239,62 @@ class DriveInput(BaseModel):
     steer: float = Field(ge=-1.0, le=1.0, allow_inf_nan=False, description="positive = left")
     throttle: float = Field(ge=-1.0, le=1.0, allow_inf_nan=False, description="negative brakes")
     seq: int | None = Field(None, description="echoed back as input_seq in the state after it is applied")
+
+
+# ----------------------------------------------------------------------------------------- websocket messages
+# close codes of refused or ended websocket connections (1000: a normal close at the end of a race)
+CLOSE_BAD_REQUEST = 4400
+CLOSE_FORBIDDEN = 4403
+CLOSE_NOT_FOUND = 4404
+CLOSE_TAKEN = 4409
+CLOSE_OVER = 4410
+
+
+class StateMessage(BaseModel):
+    """Drive websocket, after every tick: the driven kart and the input ``seq`` that tick applied."""
+
+    type: Literal["state"] = "state"
+    step: int
+    time: float
+    status: str
+    input_seq: int | None
+    braking: bool
+    kart: KartFrame
+
+
+class EndMessage(BaseModel):
+    """Drive websocket, once the race is over (then a normal close)."""
+
+    type: Literal["end"] = "end"
+    status: RaceStatus
+    result: ResultOut | None
+
+
+class ErrorMessage(BaseModel):
+    """Drive websocket: what was wrong with the last message (the connection stays)."""
+
+    type: Literal["error"] = "error"
+    error: str
+
+
+class FrameMessage(BaseModel):
+    """Telemetry websocket, about 25 a second: a :class:`web.frame.RaceFrame` with its ``type``."""
+
+    type: Literal["frame"] = "frame"
+    race_id: str
+    track: str
+    time: float
+    step: int
+    laps: int
+    status: str
+    karts: tuple[KartFrame, ...]
+    plans_version: int
+
+
+class ResultMessage(BaseModel):
+    """Telemetry websocket, once the race is over (then a normal close)."""
+
+    type: Literal["result"] = "result"
+    race_id: str
+    status: RaceStatus
+    result: ResultOut | None

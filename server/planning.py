@@ -2,7 +2,7 @@
 
 Each worker process keeps its own planner per ``(race, kart)`` key, built from the registered controller's
 factory and reset with the race's context once; afterwards a request carries only the observation (about
-1 KB) and the answer is the :class:`~controllers.tactical.planner.Plan` (about 1 KB). A key always goes to
+1 KB) and the answer is the :class:`~controllers.plan.Plan` (about 1 KB). A key always goes to
 the same worker, so the MCTS tree reuse across re-plans works. Workers start with the ``spawn`` method and
 warm up by planning once, so numba's compiled kernels (``cache=True``) are loaded before the first race.
 
@@ -16,27 +16,19 @@ import contextlib
 import logging
 import multiprocessing
 import time
-from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass
 from typing import Any
 
-from controllers.base import Controller, HighLevelPlanner, RaceContext
+from controllers.base import HighLevelPlanner, PlanningDriver
 from controllers.plan import Plan
+from server.controller_params import build_controller
+from server.host_messages import ClosePlanners, OpenPlanner, PlannerSetup, RequestPlan, ToPlanner, WarmPlanner
 from server.loop import make_ordinary
+from server.warmup import warm_planner
 from sim_core.observation import Observation
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class PlannerSetup:
-    """How a worker builds one kart's planner: the controller factory (a module-level function, pickled by
-    reference) whose ``.planner`` it uses, and the race context to reset it with."""
-
-    factory: Callable[[], Controller]
-    context: RaceContext
 
 
 class PlannerUnavailableError(RuntimeError):
@@ -52,21 +44,16 @@ _planners: dict[str, HighLevelPlanner] = {}
 
 
 def _build(key: str, setup: PlannerSetup) -> HighLevelPlanner:
-    planner: HighLevelPlanner = setup.factory().planner  # type: ignore[attr-defined]
+    driver = build_controller(setup.factory)
+    if not isinstance(driver, PlanningDriver):
+        raise TypeError(f"{driver.name} does not plan off the tick: no planner to build")
+    planner = driver.planner
     planner.reset(setup.context)
     _planners[key] = planner
     return planner
 
 
-def _worker_open(key: str, setup: PlannerSetup) -> float:
-    """Build and reset the planner of ``key``; returns the seconds it took."""
-    start = time.perf_counter()
-    _build(key, setup)
-    return time.perf_counter() - start
-
-
-def _worker_plan(key: str, observation: Observation, setup: PlannerSetup | None) -> Plan:
-    """Plan for ``key`` from ``observation`` (building the planner first when ``setup`` is given)."""
+def _plan(key: str, observation: Observation, setup: PlannerSetup | None) -> Plan:
     planner = _planners.get(key)
     if planner is None:
         if setup is None:
@@ -75,28 +62,21 @@ def _worker_plan(key: str, observation: Observation, setup: PlannerSetup | None)
     return planner.plan(observation)
 
 
-def _worker_close(keys: tuple[str, ...]) -> None:
-    """Forget the planners of ``keys``."""
-    for key in keys:
-        _planners.pop(key, None)
-
-
-def _worker_warm() -> float:
-    """Plan once on the oval with a small budget so every compiled kernel is loaded; returns seconds."""
-    from controllers.tactical.high_level import MCTSPlanner
-    from sim_core.observation import observe
-    from sim_core.params import SimParams
-    from sim_core.track_io import get_track
-    from sim_core.world import World
-
-    start = time.perf_counter()
-    track = get_track("oval")
-    params = SimParams()
-    world = World(track, 1, 2, params, laps=1)
-    planner = MCTSPlanner(iterations=50)
-    planner.reset(RaceContext(track, params.kart, 0, 2, world.lane_change_limit, 0))
-    planner.plan(observe(world, 0)[0])
-    return time.perf_counter() - start
+def _worker_handle(message: ToPlanner) -> float | Plan | None:
+    """Do what ``message`` asks in this worker process; returns its answer (see :mod:`server.host_messages`)."""
+    match message:
+        case RequestPlan(key, observation, setup):
+            return _plan(key, observation, setup)
+        case OpenPlanner(key, setup):
+            start = time.perf_counter()
+            _build(key, setup)
+            return time.perf_counter() - start
+        case ClosePlanners(keys):
+            for key in keys:
+                _planners.pop(key, None)
+            return None
+        case WarmPlanner():
+            return warm_planner()
 
 
 # ----------------------------------------------------------------------------------------- server side
@@ -112,7 +92,7 @@ class _Worker:
         self.keys: set[str] = set()  # keys routed here
         self.in_flight = 0  # calls submitted and not answered
         self.last_progress = time.monotonic()  # the last answer, or the start of the current busy spell
-        self.warm: Future[float] = self.executor.submit(_worker_warm)
+        self.warm: Future[Any] = self.executor.submit(_worker_handle, WarmPlanner())
 
 
 class PlannerPool:
@@ -128,7 +108,7 @@ class PlannerPool:
 
     async def wait_warm(self) -> list[float]:
         """Wait for every worker's warm-up plan; returns their seconds."""
-        return [await asyncio.wrap_future(w.warm) for w in self._workers]
+        return [float(await asyncio.wrap_future(w.warm)) for w in self._workers]
 
     async def open(self, key: str, setup: PlannerSetup) -> float:
         """Build the planner of ``key`` in its worker; returns the seconds it took there."""
@@ -136,18 +116,20 @@ class PlannerPool:
         self._home[key] = worker
         self._setups[key] = setup
         worker.keys.add(key)
-        seconds = await self._call(worker, _worker_open, key, setup)
+        seconds = await self._call(worker, OpenPlanner(key, setup))
         worker.opened.add(key)
-        return float(seconds)
+        assert isinstance(seconds, float)
+        return seconds
 
     async def plan(self, key: str, observation: Observation) -> Plan:
         """A plan for ``key`` from ``observation`` (raises what the planner raised, or
         :class:`PlannerUnavailableError`)."""
         worker = self._home[key]
         setup = None if key in worker.opened else self._setups[key]
-        plan = await self._call(worker, _worker_plan, key, observation, setup)
+        plan = await self._call(worker, RequestPlan(key, observation, setup))
         worker.opened.add(key)
-        return plan  # type: ignore[no-any-return]
+        assert isinstance(plan, Plan)
+        return plan
 
     def close(self, keys: tuple[str, ...]) -> None:
         """Forget ``keys`` here and (without waiting) in their workers."""
@@ -158,7 +140,7 @@ class PlannerPool:
                 worker.opened.difference_update(mine)
                 # a worker being replaced forgets everything anyway
                 with contextlib.suppress(BrokenProcessPool, RuntimeError):
-                    worker.executor.submit(_worker_close, mine)
+                    worker.executor.submit(_worker_handle, ClosePlanners(mine))
         for key in keys:
             self._home.pop(key, None)
             self._setups.pop(key, None)
@@ -172,17 +154,18 @@ class PlannerPool:
         self._replace(worker, kill=True)
         return True
 
-    async def _call(self, worker: _Worker, fn: Callable[..., Any], *args: Any) -> Any:
+    async def _call(self, worker: _Worker, message: ToPlanner) -> float | Plan | None:
         if worker.in_flight == 0:
             worker.last_progress = time.monotonic()
         try:
-            future = worker.executor.submit(fn, *args)
+            future = worker.executor.submit(_worker_handle, message)
         except (BrokenProcessPool, RuntimeError) as exc:  # died, or shut down by a replacement
             self._replace_if_current(worker)
             raise PlannerUnavailableError(str(exc)) from None
         worker.in_flight += 1
         try:
-            return await asyncio.wrap_future(future)
+            answer: float | Plan | None = await asyncio.wrap_future(future)
+            return answer
         except BrokenProcessPool as exc:
             self._replace_if_current(worker)
             raise PlannerUnavailableError(str(exc)) from None

@@ -13,18 +13,15 @@ Skipped only when no chromium binary is installed (``scripts/install_browser.sh`
 
 from __future__ import annotations
 
-import asyncio
 import math
 import os
-import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import httpx
 import pytest
-import uvicorn
-from fastapi import FastAPI
+from support.live_server import ServerThread
 
 ROOT = Path(__file__).resolve().parents[1]
 ARTIFACTS = ROOT / "test-artifacts"
@@ -55,29 +52,6 @@ pytestmark = pytest.mark.skipif(
 )
 
 
-# ---------------------------------------------------------------------------------------------- servers
-class ServerThread:
-    """uvicorn serving ``app`` (with its lifespan) on a free local port from a background thread."""
-
-    def __init__(self, app: FastAPI) -> None:
-        config = uvicorn.Config(app, host="127.0.0.1", port=0, log_level="warning", ws_per_message_deflate=False)
-        self.server = uvicorn.Server(config)
-        self.thread = threading.Thread(target=lambda: asyncio.run(self.server.serve()), daemon=True)
-
-    def __enter__(self) -> str:
-        self.thread.start()
-        deadline = time.monotonic() + 60
-        while not self.server.started:
-            assert time.monotonic() < deadline and self.thread.is_alive(), "uvicorn did not start"
-            time.sleep(0.02)
-        port = int(self.server.servers[0].sockets[0].getsockname()[1])
-        return f"http://127.0.0.1:{port}"
-
-    def __exit__(self, *exc: object) -> None:
-        self.server.should_exit = True
-        self.thread.join(30)
-
-
 @pytest.fixture(scope="module")
 def live_race(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, str]]:
     """(base URL, race id) of an MCTS-LQNG vs Fixed-LQNG race on the oval, on the real server (temporary DB)."""
@@ -85,7 +59,8 @@ def live_race(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, s
     from server.settings import Settings
 
     db = tmp_path_factory.mktemp("browser") / "karting.db"
-    with ServerThread(create_app(Settings(database_url=f"sqlite:///{db}", port=0))) as base:
+    with ServerThread(create_app(Settings(database_url=f"sqlite:///{db}", port=0))) as server:
+        base = server.url
         body = {
             "track": "oval",
             "laps": 3,

@@ -12,7 +12,7 @@ from typing import Any
 
 import httpx
 import pytest
-from test_server_harness import LiveServer, server_settings, start_race, wait_for, wait_status
+from support.live_server import LiveServer, server_settings, start_race, wait_for, wait_status
 
 from controllers.base import Action, RaceContext
 from controllers.registry import REGISTRY, ControllerSpec

@@ -9,28 +9,30 @@ from __future__ import annotations
 import asyncio
 import logging
 import socket
-import threading
+import sys
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import httpx
 import msgspec
 import numpy as np
 import pytest
-import uvicorn
 import viser
 import websockets
 import zstandard
 from fastapi import FastAPI
+from support.live_server import ServerThread
 from websockets.exceptions import ConnectionClosed
 from websockets.typing import Subprotocol
 
 from sim_core.track import Track
 from sim_core.track_io import get_track
 from web.frame import KartFrame, RaceFrame
+from web.meshes import CHECKPOINT_COLOR, PREDICTION_COLOR, WAYPOINT_COLOR
 from web.routes import make_web_router
-from web.scene import CHECKPOINT_COLOR, PREDICTION_COLOR, WAYPOINT_COLOR, WAYPOINT_POOL, RaceScene
+from web.scene import WAYPOINT_POOL, RaceScene
 from web.viewer import VISER_SUBPROTOCOL
 
 SUBPROTOCOL = Subprotocol(f"viser-v{viser.__version__}")
@@ -237,6 +239,16 @@ def test_update_never_raises_and_close_is_idempotent(caplog: pytest.LogCaptureFi
         s.bind(("127.0.0.1", port))
 
 
+def test_scenes_started_at_once_leave_stdout_alone() -> None:
+    track = get_track("oval")
+    stdout = sys.stdout
+    with ThreadPoolExecutor(4) as pool:
+        scenes = list(pool.map(lambda i: RaceScene(track, [("A", "human")], f"at once {i}"), range(4)))
+    for scene in scenes:
+        scene.close()
+    assert sys.stdout is stdout
+
+
 def test_hud_shows_standings_and_escapes_names() -> None:
     track = get_track("oval")
     hostile = "<img src=x onerror=alert(1)> | *b*"
@@ -254,44 +266,6 @@ def test_hud_shows_standings_and_escapes_names() -> None:
 
 
 # ---------------------------------------------------------------------------------------------- relay
-class ServerThread:
-    """uvicorn serving ``app`` on a free local port from a background thread."""
-
-    def __init__(self, app: FastAPI) -> None:
-        config = uvicorn.Config(
-            app, host="127.0.0.1", port=0, log_level="warning", ws_per_message_deflate=False, lifespan="off"
-        )
-        self.server = uvicorn.Server(config)
-        self.loop: asyncio.AbstractEventLoop | None = None
-        self.thread = threading.Thread(target=self._run, daemon=True)
-
-    def _run(self) -> None:
-        self.loop = asyncio.new_event_loop()
-        self.loop.run_until_complete(self.server.serve())
-
-    def __enter__(self) -> ServerThread:
-        self.thread.start()
-        deadline = time.monotonic() + 10
-        while not self.server.started:
-            assert time.monotonic() < deadline and self.thread.is_alive(), "uvicorn did not start"
-            time.sleep(0.01)
-        self.port = int(self.server.servers[0].sockets[0].getsockname()[1])
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.server.should_exit = True
-        self.thread.join(10)
-
-    def task_names(self) -> set[str]:
-        """Names of the tasks now alive on the server's loop."""
-        assert self.loop is not None
-
-        async def names() -> set[str]:
-            return {t.get_name() for t in asyncio.all_tasks() if t is not asyncio.current_task()}
-
-        return asyncio.run_coroutine_threadsafe(names(), self.loop).result(5)
-
-
 @pytest.fixture()
 def relay_app() -> Iterator[tuple[ServerThread, RaceScene]]:
     scene = RaceScene(get_track("oval"), [("A", "mcts-lqng"), ("B", "human")], "relay test")
@@ -309,7 +283,7 @@ def relay_app() -> Iterator[tuple[ServerThread, RaceScene]]:
 
     app = FastAPI()
     app.include_router(make_web_router(scene_port))
-    with ServerThread(app) as server:
+    with ServerThread(app, lifespan="off") as server:
         yield server, scene
     scene.close()
 

@@ -58,6 +58,6 @@ class RaceFrame:
     time: float  # [s] race time
     step: int
     laps: int
-    status: str  # "running" | "finished" | "stopped"
+    status: str  # the race status (server.status.RaceStatus values: "starting", "running", "finished", ...)
     karts: tuple[KartFrame, ...]
     plans_version: int  # changes whenever any kart's waypoints change (viewers redraw plans only then)

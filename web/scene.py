@@ -3,22 +3,20 @@
 The scene is built once in the constructor; :meth:`RaceScene.update` only moves, shows and hides existing nodes
 (viser coalesces to the latest value per node, so slow viewers skip frames instead of queueing them). Node names:
 
-* ``/track/ground``, ``/track/surface`` (grey road mesh between the walls), ``/track/walls/left`` and
-  ``/track/walls/right`` (thin vertical meshes), ``/track/lanes`` (the lane lines, one line-segments node),
-  ``/track/start`` (the start/finish line), ``/track/checkpoints/cp{c}`` (purple boxes across the road);
+* ``/track/...``: the track (:mod:`web.meshes`);
 * ``/karts/kart{i}`` (a box in the kart's colour), ``/karts/kart{i}/nose`` (marks the front),
   ``/karts/kart{i}/label`` (its display name);
 * ``/plans/kart{i}/wp{j}`` (green boxes: the kart's planned waypoints) and ``/plans/kart{i}/pred{j}``
   (translucent orange boxes: its planner's predictions of the other karts' waypoints), hidden when unused.
 
-The GUI has a HUD (markdown, shared by every viewer) and a per-viewer "Follow" dropdown whose camera chases the
-chosen kart. The viser server listens on 127.0.0.1 only; browsers reach it through :mod:`web.viewer`'s relay.
+The GUI has a HUD (:mod:`web.hud`: markdown, shared by every viewer) and a per-viewer "Follow" dropdown whose
+camera chases the chosen kart. The viser server listens on 127.0.0.1 only; browsers reach it through
+:mod:`web.viewer`'s relay.
 """
 
 from __future__ import annotations
 
 import contextlib
-import html
 import io
 import logging
 import math
@@ -27,11 +25,12 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import numpy as np
 import viser
 
 from sim_core.track import Track
 from web.frame import KART_COLORS, KartFrame, RaceFrame
+from web.hud import hud_text, legend_text
+from web.meshes import PREDICTION_COLOR, WAYPOINT_COLOR, add_track, heading_wxyz
 
 log = logging.getLogger(__name__)
 
@@ -42,73 +41,15 @@ PREDICTION_POOL_PER_OPPONENT = 8  # orange prediction boxes per opponent (the pl
 PREDICTION_POOL_MAX = 24
 WAYPOINT_SIZE = 1.0  # [m] edge of a green waypoint box
 PREDICTION_SIZE = 0.7  # [m] edge of an orange prediction box
-WALL_HEIGHT = 0.6  # [m]
 HUD_PERIOD = 0.25  # [s] wall-clock time between HUD refreshes
 CAMERA_PERIOD = 0.05  # [s] wall-clock time between follow-camera moves (20 Hz)
 FOLLOW_BEHIND = 11.0  # [m] follow camera distance behind the kart
 FOLLOW_ABOVE = 5.0  # [m] follow camera height
 FOLLOW_AHEAD = 6.0  # [m] the follow camera looks this far ahead of the kart
 FREE_CAMERA = "Free camera"
-
-ROAD_COLOR = (105, 105, 112)
-GROUND_COLOR = (196, 190, 170)
-WALL_COLOR = (236, 236, 236)
-LANE_COLOR = (250, 250, 250)
-START_COLOR = (20, 20, 20)
-CHECKPOINT_COLOR = (150, 40, 220)  # purple
-WAYPOINT_COLOR = (20, 200, 60)  # green
-PREDICTION_COLOR = (255, 140, 20)  # orange
-
-_MARKDOWN_ESCAPES = str.maketrans({c: "\\" + c for c in "\\`*_[]|#!~"})
-
-
-def markdown_text(text: str) -> str:
-    """``text`` as literal markdown text: HTML and markdown syntax escaped (viser renders raw HTML unsanitised,
-    and display names come from users)."""
-    return html.escape(text.translate(_MARKDOWN_ESCAPES), quote=False)
-
-
-def _swatch(index: int) -> str:
-    r, g, b = KART_COLORS[index % len(KART_COLORS)]
-    return f'<span style="color: rgb({r}, {g}, {b})">■</span>'
-
-
-def heading_wxyz(heading: float) -> tuple[float, float, float, float]:
-    """Unit quaternion (w, x, y, z) of a rotation by ``heading`` [rad] about +z."""
-    half = 0.5 * heading
-    return (math.cos(half), 0.0, 0.0, math.sin(half))
-
-
-def _strip_mesh(a: np.ndarray, b: np.ndarray, za: float, zb: float) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices and faces of a closed strip between the closed polylines ``a`` and ``b`` (both (M, 2))."""
-    m = len(a)
-    vertices = np.empty((2 * m, 3), dtype=np.float32)
-    vertices[0::2, :2] = a
-    vertices[0::2, 2] = za
-    vertices[1::2, :2] = b
-    vertices[1::2, 2] = zb
-    i = np.arange(m)
-    j = (i + 1) % m
-    a0, b0, a1, b1 = 2 * i, 2 * i + 1, 2 * j, 2 * j + 1
-    faces = np.concatenate([np.stack([a0, b0, a1], axis=1), np.stack([a1, b0, b1], axis=1)]).astype(np.uint32)
-    return vertices, faces
-
-
-def lane_polylines(track: Track) -> np.ndarray:
-    """(n_lanes, M, 2) world positions of every lane along the whole centre line (lane 1 first)."""
-    frac = np.asarray(track.lane_fractions, dtype=float)[:, None]
-    offsets = np.where(frac > 0, frac * track.lane_half_left[None, :], frac * track.lane_half_right[None, :])
-    return track.centre_xy[None, :, :] + track.centre_normal[None, :, :] * offsets[:, :, None]
-
-
-def _polyline_segments(points: np.ndarray, z: float, step: int = 1) -> np.ndarray:
-    """(S, 2, 3) segments of a closed polyline, taking every ``step``-th point."""
-    p = points[::step]
-    seg = np.empty((len(p), 2, 3), dtype=np.float32)
-    seg[:, 0, :2] = p
-    seg[:, 1, :2] = np.roll(p, -1, axis=0)
-    seg[:, :, 2] = z
-    return seg
+# contextlib.redirect_stdout swaps the process-wide sys.stdout; races start their scenes in threads at once, and
+# unserialised swaps could leave sys.stdout pointing at one scene's buffer for good
+_STDOUT_SWAP = threading.Lock()
 
 
 class _PoseWriter:
@@ -187,7 +128,7 @@ class RaceScene:
         self._viewers_lock = threading.Lock()
 
         # viser prints a banner to stdout on start even when not verbose; keep the server's output clean
-        with contextlib.redirect_stdout(io.StringIO()):
+        with _STDOUT_SWAP, contextlib.redirect_stdout(io.StringIO()):
             self.server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False, label=label)
         log.debug("race viewer %s: viser on 127.0.0.1:%d", label, self.server.get_port())
         try:
@@ -243,72 +184,7 @@ class RaceScene:
         server.scene.configure_environment_map("warehouse", environment_intensity=0.45)
         server.scene.set_up_direction("+z")
         scene = server.scene
-
-        lo = np.minimum(track.left_wall.min(axis=0), track.right_wall.min(axis=0))
-        hi = np.maximum(track.left_wall.max(axis=0), track.right_wall.max(axis=0))
-        centre = 0.5 * (lo + hi)
-        extent = float(max(hi[0] - lo[0], hi[1] - lo[1], 20.0))
-        server.initial_camera.look_at = (float(centre[0]), float(centre[1]), 0.0)
-        server.initial_camera.position = (float(centre[0]), float(centre[1] - 0.6 * extent), 0.6 * extent)
-
-        size = extent * 1.4
-        scene.add_grid(
-            "/track/ground",
-            width=size,
-            height=size,
-            plane="xy",
-            cell_size=5.0,
-            section_size=25.0,
-            position=(float(centre[0]), float(centre[1]), -0.05),
-            plane_color=GROUND_COLOR,
-            plane_opacity=1.0,
-            cell_color=(180, 174, 154),
-            section_color=(160, 154, 134),
-            fade_distance=3.0 * extent,
-            shadow_opacity=0.0,
-        )
-        vertices, faces = _strip_mesh(track.left_wall, track.right_wall, 0.0, 0.0)
-        scene.add_mesh_simple(
-            "/track/surface",
-            vertices,
-            faces,
-            color=ROAD_COLOR,
-            side="double",
-            flat_shading=True,
-            cast_shadow=False,
-            receive_shadow=0.3,
-        )
-        for side, wall in (("left", track.left_wall), ("right", track.right_wall)):
-            vertices, faces = _strip_mesh(wall, wall, 0.0, WALL_HEIGHT)
-            scene.add_mesh_simple(
-                f"/track/walls/{side}", vertices, faces, color=WALL_COLOR, side="double", cast_shadow=False
-            )
-
-        lanes = lane_polylines(track)
-        segments = np.concatenate([_polyline_segments(lane, 0.02, step=2) for lane in lanes])
-        scene.add_line_segments("/track/lanes", segments, LANE_COLOR, thickness=0.12)
-
-        width = float(track.lane_half_left[0] + track.lane_half_right[0])
-        for c in range(track.n_checkpoints):
-            point, normal = track.checkpoint_frame(c)
-            left = float(track.width_left[track.checkpoint_sample[c]])
-            right = float(track.width_right[track.checkpoint_sample[c]])
-            mid = point + normal * 0.5 * (left - right)
-            heading = math.atan2(-float(normal[0]), float(normal[1]))  # the tangent is the normal turned right
-            scene.add_box(
-                f"/track/checkpoints/cp{c}",
-                color=CHECKPOINT_COLOR,
-                dimensions=(0.6, left + right, 0.2),
-                position=(float(mid[0]), float(mid[1]), 0.1),
-                wxyz=heading_wxyz(heading),
-                opacity=0.85,
-                cast_shadow=False,
-            )
-        point, normal = track.checkpoint_frame(0)
-        across = np.stack([point + normal * width * 0.55, point - normal * width * 0.55])
-        scene.add_line_segments(
-            "/track/start", np.array([[[*across[0], 0.14], [*across[1], 0.14]]]), START_COLOR, thickness=0.25
-        )
+        add_track(server, track)
 
         self._kart_nodes: list[viser.BoxHandle] = []
         self._kart_writers: list[_PoseWriter] = []
@@ -371,20 +247,8 @@ class RaceScene:
 
         self._waypoint_writers = [[_PoseWriter(node) for node in pool] for pool in self._waypoint_nodes]
         self._prediction_writers = [[_PoseWriter(node) for node in pool] for pool in self._prediction_nodes]
-        self._hud = server.gui.add_markdown(self._hud_text(None), order=10.0)
-        legend = " · ".join(
-            f'<span style="color: rgb{color}">■</span> {what}'
-            for color, what in (
-                (CHECKPOINT_COLOR, "checkpoints"),
-                (WAYPOINT_COLOR, "planned waypoints"),
-                (PREDICTION_COLOR, "predicted opponents"),
-            )
-        )
-        self._legend = server.gui.add_markdown(
-            f"{legend}<br/>fault: collisions at fault · illegal LC: illegal lane changes · "
-            "drv. faults: driver errors and missed deadlines",
-            order=11.0,
-        )
+        self._hud = server.gui.add_markdown(hud_text(track.name, self.karts, None), order=10.0)
+        self._legend = server.gui.add_markdown(legend_text(), order=11.0)
 
     # ------------------------------------------------------------------ per-viewer GUI
     def _follow_options(self) -> list[str]:
@@ -415,7 +279,7 @@ class RaceScene:
             if hud_due:
                 self._hud_due = now + HUD_PERIOD
                 self._hud_status = frame.status
-                self._hud.content = self._hud_text(frame)
+                self._hud.content = hud_text(self.track.name, self.karts, frame)
         if now >= self._camera_due:
             self._camera_due = now + CAMERA_PERIOD
             self._follow_cameras(karts)
@@ -460,32 +324,6 @@ class RaceScene:
             with contextlib.suppress(ValueError), viewer.client.atomic():
                 camera.position = (kart.x - FOLLOW_BEHIND * c, kart.y - FOLLOW_BEHIND * s, FOLLOW_ABOVE)
                 camera.look_at = (kart.x + FOLLOW_AHEAD * c, kart.y + FOLLOW_AHEAD * s, 0.0)
-
-    def _hud_text(self, frame: RaceFrame | None) -> str:
-        if frame is None:
-            rows = [
-                f"| {_swatch(i)} {markdown_text(name)} | – | – | – | – | – | – |"
-                for i, (name, _) in enumerate(self.karts)
-            ]
-            head = f"**{markdown_text(self.track.name)}** · waiting for the start"
-        else:
-            rows = []
-            for k in sorted(frame.karts, key=lambda k: k.position):
-                if k.finished:
-                    lap = "✓ " + (f"{k.finish_time:.2f} s" if k.finish_time is not None else "")
-                else:
-                    lap = str(k.lap)
-                rows.append(
-                    f"| {_swatch(k.index)} {markdown_text(k.name)} | {k.position} | {lap} | "
-                    f"{k.speed * 3.6:.0f} | {k.collisions_at_fault} | {k.illegal_lane_changes} | "
-                    f"{k.controller_faults} |"
-                )
-            head = (
-                f"**{markdown_text(frame.track)}** · {markdown_text(frame.status)} · {frame.time:.1f} s · "
-                f"{frame.laps} laps"
-            )
-        table = "| kart | pos | lap | km/h | fault | illegal LC | drv. faults |\n|---|---|---|---|---|---|---|\n"
-        return head + "\n\n" + table + "\n".join(rows)
 
 
 def _show_points(pool: list[_PoseWriter], points: Sequence[tuple[float, float]], z: float) -> None:

@@ -1,0 +1,52 @@
+"""What a race is started from: its track, laps, seed and karts (each a display name, a controller and its
+parameters). Built once from a validated request (:mod:`server.routes.races`), stored with the race, read back."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from sim_core.track import Track
+
+HUMAN = "human"  # the controller name of a kart driven over the drive websocket
+
+ParamValue = bool | int | float | str  # a controller parameter's value, as a race request gives it
+
+
+@dataclass(frozen=True)
+class KartEntry:
+    """One kart of a race: grid slot, display name, controller (registered name or ``human``) and the
+    controller's parameters that differ from its defaults."""
+
+    index: int
+    name: str
+    controller: str
+    params: Mapping[str, ParamValue] = field(default_factory=dict)
+
+    @property
+    def human(self) -> bool:
+        """Whether a person (or a client program) drives this kart over the websocket."""
+        return self.controller == HUMAN
+
+    def to_json(self) -> dict[str, Any]:
+        """``{index, name, controller, params}`` (as stored with the race)."""
+        return {"index": self.index, "name": self.name, "controller": self.controller, "params": dict(self.params)}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> KartEntry:
+        """Read back :meth:`to_json` (races stored before parameters existed have none)."""
+        return cls(int(data["index"]), str(data["name"]), str(data["controller"]), dict(data.get("params") or {}))
+
+
+@dataclass(frozen=True)
+class RaceConfig:
+    """Everything a race is started from (already validated)."""
+
+    track_name: str
+    track: Track
+    laps: int
+    seed: int
+    start_lanes: tuple[int, ...] | None
+    kart_preset: str
+    karts: tuple[KartEntry, ...]

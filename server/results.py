@@ -1,0 +1,155 @@
+"""A race's result as one typed record: built once when the race ends, stored as JSON, read back into the same type.
+
+A :class:`KartRecord` holds the referee's figures as they are (:class:`sim_core.world.KartResult`, whatever
+fields it has in this version) next to the kart's identity and its controller's faults. Its JSON form is flat,
+the shape ``GET /api/races/{id}/result`` shows: the referee's fields under their own names (``kart`` is the
+kart's ``index``, ``laps_completed`` is ``laps``), the faults, and ``controller_faults``. A record stored by an
+older version loads too: a field it lacks takes the field's default, or ``None``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import MISSING, Field, asdict, dataclass, fields
+from typing import Any
+
+from server.race_config import KartEntry
+from server.status import RaceStatus
+from sim_core.world import KartResult, RaceResult
+
+# KartResult field -> its name in a record (and the API), where they differ
+REFEREE_NAMES: Mapping[str, str] = {"kart": "index", "laps_completed": "laps"}
+
+
+def record_name(referee_field: str) -> str:
+    """The name under which a :class:`KartResult` field appears in a stored record and in the API."""
+    return REFEREE_NAMES.get(referee_field, referee_field)
+
+
+def _default(f: Field[Any]) -> Any:
+    if f.default is not MISSING:
+        return f.default
+    if f.default_factory is not MISSING:
+        return f.default_factory()
+    return None
+
+
+@dataclass(frozen=True)
+class DriverFaults:
+    """What a kart's controller got wrong in a race, and how many plans its tracker was given."""
+
+    exceptions: int = 0
+    hangs: int = 0
+    missed_deadlines: int = 0  # ticks that found no fresh input for an observation handed over
+    planner_faults: int = 0  # plans that failed or timed out
+    plans_applied: int = 0
+    disabled: bool = False  # its controller failed to reset or hung: the kart braked from then on
+    last_error: str | None = None
+
+    @property
+    def controller_faults(self) -> int:
+        """Exceptions, hangs, missed deadlines and failed plans."""
+        return self.exceptions + self.hangs + self.missed_deadlines + self.planner_faults
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> DriverFaults:
+        """The faults in a stored kart record (missing ones: their defaults)."""
+        return cls(**{f.name: data.get(f.name, _default(f)) for f in fields(cls)})
+
+
+@dataclass(frozen=True)
+class KartRecord:
+    """One kart's result: who drove it, the referee's figures and its controller's faults."""
+
+    index: int
+    name: str
+    controller: str
+    winner: bool
+    referee: KartResult
+    faults: DriverFaults
+
+    def to_json(self) -> dict[str, Any]:
+        """The flat JSON form (see the module docstring)."""
+        referee = {record_name(name): value for name, value in asdict(self.referee).items()}
+        return {
+            "index": self.index,
+            "name": self.name,
+            "controller": self.controller,
+            **referee,
+            "winner": self.winner,
+            **asdict(self.faults),
+            "controller_faults": self.faults.controller_faults,
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> KartRecord:
+        """Read back :meth:`to_json` of this or an older version."""
+        referee = KartResult(**{f.name: data.get(record_name(f.name), _default(f)) for f in fields(KartResult)})
+        return cls(
+            int(data["index"]),
+            str(data["name"]),
+            str(data["controller"]),
+            bool(data.get("winner", False)),
+            referee,
+            DriverFaults.from_json(data),
+        )
+
+
+@dataclass(frozen=True)
+class RaceRecord:
+    """A race's result: final when ``status`` is ``finished``, the state at the end otherwise."""
+
+    race_id: str
+    status: RaceStatus
+    track: str
+    laps: int
+    duration: float  # [s] race time
+    winner: int | None  # kart index of the fastest finisher; None if nobody finished
+    karts: tuple[KartRecord, ...]
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON form stored with the race (and shown by the API)."""
+        return {
+            "race_id": self.race_id,
+            "status": self.status.value,
+            "track": self.track,
+            "laps": self.laps,
+            "duration": self.duration,
+            "winner": self.winner,
+            "karts": [kart.to_json() for kart in self.karts],
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> RaceRecord:
+        """Read back :meth:`to_json` of this or an older version."""
+        return cls(
+            str(data["race_id"]),
+            RaceStatus(data["status"]),
+            str(data["track"]),
+            int(data["laps"]),
+            float(data["duration"]),
+            data.get("winner"),
+            tuple(KartRecord.from_json(kart) for kart in data["karts"]),
+        )
+
+    def kart(self, index: int) -> KartRecord | None:
+        """The record of kart ``index`` (None if it has none)."""
+        return next((k for k in self.karts if k.index == index), None)
+
+
+def race_record(
+    race_id: str,
+    status: RaceStatus,
+    track: str,
+    laps: int,
+    result: RaceResult,
+    karts: Sequence[KartEntry],
+    faults: Sequence[DriverFaults],
+) -> RaceRecord:
+    """The record of a race that ended with ``status``: the referee's ``result`` with each kart's identity and
+    faults (both indexed by kart)."""
+    records = tuple(
+        KartRecord(r.kart, karts[r.kart].name, karts[r.kart].controller, result.winner == r.kart, r, faults[r.kart])
+        for r in result.karts
+    )
+    return RaceRecord(race_id, status, track, laps, result.duration, result.winner, records)

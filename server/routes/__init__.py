@@ -1,0 +1,12 @@
+"""The API's routes under ``/api``: the catalogue (tracks, controllers), races (REST), and the drive and telemetry
+websockets. :data:`api_router` aggregates them."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+
+from server.routes import catalogue, drive, races, telemetry
+
+api_router = APIRouter(prefix="/api")
+for _module in (catalogue, races, drive, telemetry):
+    api_router.include_router(_module.router)

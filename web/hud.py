@@ -1,0 +1,68 @@
+"""The scene's heads-up display: the standings table (markdown, shared by every viewer) and the colour legend.
+
+Display names come from users and viser renders raw HTML unsanitised, so every name is escaped
+(:func:`markdown_text`).
+"""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Sequence
+
+from web.frame import KART_COLORS, KartFrame, RaceFrame
+from web.meshes import CHECKPOINT_COLOR, PREDICTION_COLOR, WAYPOINT_COLOR
+
+_MARKDOWN_ESCAPES = str.maketrans({c: "\\" + c for c in "\\`*_[]|#!~"})
+_TABLE_HEAD = "| kart | pos | lap | km/h | fault | illegal LC | drv. faults |\n|---|---|---|---|---|---|---|\n"
+
+
+def markdown_text(text: str) -> str:
+    """``text`` as literal markdown text: HTML and markdown syntax escaped (viser renders raw HTML unsanitised,
+    and display names come from users)."""
+    return html.escape(text.translate(_MARKDOWN_ESCAPES), quote=False)
+
+
+def _swatch(index: int) -> str:
+    r, g, b = KART_COLORS[index % len(KART_COLORS)]
+    return f'<span style="color: rgb({r}, {g}, {b})">■</span>'
+
+
+def _lap(kart: KartFrame) -> str:
+    if not kart.finished:
+        return str(kart.lap)
+    return "✓ " + (f"{kart.finish_time:.2f} s" if kart.finish_time is not None else "")
+
+
+def hud_text(track_name: str, karts: Sequence[tuple[str, str]], frame: RaceFrame | None) -> str:
+    """The standings table of ``frame`` (before the first frame: the grid of ``karts``, ``(name, controller)``)."""
+    if frame is None:
+        rows = [f"| {_swatch(i)} {markdown_text(name)} | – | – | – | – | – | – |" for i, (name, _) in enumerate(karts)]
+        head = f"**{markdown_text(track_name)}** · waiting for the start"
+    else:
+        rows = []
+        for k in sorted(frame.karts, key=lambda k: k.position):
+            rows.append(
+                f"| {_swatch(k.index)} {markdown_text(k.name)} | {k.position} | {_lap(k)} | "
+                f"{k.speed * 3.6:.0f} | {k.collisions_at_fault} | {k.illegal_lane_changes} | "
+                f"{k.controller_faults} |"
+            )
+        head = (
+            f"**{markdown_text(frame.track)}** · {markdown_text(frame.status)} · {frame.time:.1f} s · {frame.laps} laps"
+        )
+    return head + "\n\n" + _TABLE_HEAD + "\n".join(rows)
+
+
+def legend_text() -> str:
+    """What the colours and the table's columns mean."""
+    legend = " · ".join(
+        f'<span style="color: rgb{color}">■</span> {what}'
+        for color, what in (
+            (CHECKPOINT_COLOR, "checkpoints"),
+            (WAYPOINT_COLOR, "planned waypoints"),
+            (PREDICTION_COLOR, "predicted opponents"),
+        )
+    )
+    return (
+        f"{legend}<br/>fault: collisions at fault · illegal LC: illegal lane changes · "
+        "drv. faults: driver errors and missed deadlines"
+    )
