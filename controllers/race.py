@@ -2,16 +2,14 @@
 
 from __future__ import annotations
 
-import json
 import time
-from dataclasses import asdict, dataclass, field
-from pathlib import Path
+from dataclasses import dataclass
 
 import numpy as np
 
 from controllers.base import Controller, PlanningDriver, RaceContext
-from controllers.plan import Plan
 from controllers.registry import make_controller
+from controllers.replay import Replay, ReplayRecorder, apply_plan_targets
 from sim_core.observation import observe
 from sim_core.params import DT, SimParams, kart_preset
 from sim_core.track_io import get_track, load_track
@@ -31,22 +29,6 @@ class RaceSpec:
     plan_latency: float = 0.1  # [s] simulated delay between requesting and applying a high-level plan
 
 
-@dataclass
-class Replay:
-    """Every kart's pose and inputs per step, plus the plans as they were applied."""
-
-    track: str
-    dt: float
-    poses: list[list[list[float]]] = field(
-        default_factory=list
-    )  # [step][kart] = [x, y, heading, speed, steer, throttle]
-    plans: list[dict[str, object]] = field(default_factory=list)
-
-    def save(self, path: str | Path) -> None:
-        """Write the replay as JSON."""
-        Path(path).write_text(json.dumps(asdict(self)))
-
-
 @dataclass(frozen=True)
 class RaceOutcome:
     """The referee's result, wall time and the optional replay."""
@@ -64,11 +46,6 @@ def load_any_track(name: str):  # type: ignore[no-untyped-def]
     return get_track(name)
 
 
-def _targets_from(world: World, kart: int, plan: Plan) -> None:
-    for waypoint in plan.ego_waypoints:
-        world.set_target(0, kart, waypoint.checkpoint, waypoint.lane, waypoint.speed)
-
-
 def run_race(spec: RaceSpec, *, record: bool = False) -> RaceOutcome:
     """Race ``spec`` to the end (everyone finished or the time limit) and return the result."""
     track = load_any_track(spec.track)
@@ -81,7 +58,9 @@ def run_race(spec: RaceSpec, *, record: bool = False) -> RaceOutcome:
         if isinstance(driver, PlanningDriver):
             driver.plan_latency = spec.plan_latency
         driver.reset(RaceContext(track, params.kart, k, n, world.lane_change_limit, spec.seed * 1000 + k))
-    replay = Replay(track.name, DT) if record else None
+    recorder = ReplayRecorder(track.name, n) if record else None
+    if recorder is not None:
+        recorder.allocate(round(params.rules.time_limit / DT) + 1)
     actions = np.zeros((1, n, 2))
     hold = [max(1, round(1.0 / (DT * d.rate_hz))) for d in drivers]
     applied = [0] * n
@@ -96,21 +75,11 @@ def run_race(spec: RaceSpec, *, record: bool = False) -> RaceOutcome:
                 if isinstance(driver, PlanningDriver) and driver.plans_applied != applied[k]:
                     applied[k] = driver.plans_applied
                     if driver.active_plan is not None:
-                        _targets_from(world, k, driver.active_plan)
-                        if replay is not None:
-                            replay.plans.append({"step": step, "kart": k, "plan": asdict(driver.active_plan)})
+                        apply_plan_targets(world, 0, k, driver.active_plan)
+                        if recorder is not None:
+                            recorder.plan(step, k, driver.active_plan)
         world.step(actions)
-        if replay is not None:
-            replay.poses.append(
-                [
-                    [
-                        *map(float, world.positions[0, k]),
-                        float(world.headings[0, k]),
-                        float(world.speeds[0, k]),
-                        *map(float, actions[0, k]),
-                    ]
-                    for k in range(n)
-                ]
-            )
+        if recorder is not None:
+            recorder.record(world, actions[0])
         step += 1
-    return RaceOutcome(spec, world.result(0), time.perf_counter() - t0, replay)
+    return RaceOutcome(spec, world.result(0), time.perf_counter() - t0, None if recorder is None else recorder.replay())

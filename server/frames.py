@@ -5,13 +5,9 @@ message, and the replay's row (every kart's pose and inputs, and the plans as th
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import asdict
 from typing import Any
 
-import numpy as np
-
-from controllers.plan import Plan
-from controllers.race import Replay
+from controllers.replay import Replay
 from server.drivers import KartDriver
 from server.models import FrameMessage
 from server.race_config import KartEntry
@@ -91,36 +87,7 @@ class TelemetryMessage:
         return self._text
 
 
-class ReplayRecorder:
-    """Every kart's pose and inputs per step and the plans as they were applied, in the headless replay format
-    (:class:`controllers.race.Replay`)."""
-
-    def __init__(self, track_name: str, n_karts: int) -> None:
-        self.track_name = track_name
-        self._poses = np.zeros((0, n_karts, 6))  # per step and kart: x, y, heading, speed, steer, throttle
-        self._recorded = 0  # steps in _poses
-        self._plans: list[dict[str, Any]] = []
-
-    def allocate(self, steps: int) -> None:
-        """Room for ``steps`` steps, allocated now: a growing list of lists would give the garbage collector
-        work during the race."""
-        self._poses = np.zeros((steps, self._poses.shape[1], 6))
-        self._recorded = 0
-
-    def record(self, world: World, actions: np.ndarray) -> None:
-        """The step ``world`` just took with ``actions`` (K, 2) (ignored once the room is full)."""
-        if self._recorded < len(self._poses):
-            pose = self._poses[self._recorded]
-            pose[:, :4] = world.fstate[0][:, POSE_COLUMNS]
-            pose[:, 4:] = actions
-            self._recorded += 1
-
-    def plan(self, step: int, kart: int, plan: Plan) -> None:
-        """A plan applied to ``kart`` at race step ``step``."""
-        self._plans.append({"step": step, "kart": kart, "plan": asdict(plan)})
-
-    def to_json(self, race_id: str, karts: Sequence[KartEntry]) -> dict[str, Any]:
-        """The replay so far plus the race id and karts."""
-        replay = Replay(self.track_name, DT, self._poses[: self._recorded].tolist(), list(self._plans))
-        listed = [{"index": k.index, "name": k.name, "controller": k.controller} for k in karts]
-        return {"race_id": race_id, "karts": listed, **vars(replay)}
+def replay_json(replay: Replay, race_id: str, karts: Sequence[KartEntry]) -> dict[str, Any]:
+    """A race's replay (the headless format, :class:`controllers.replay.Replay`) plus the race id and karts."""
+    listed = [{"index": k.index, "name": k.name, "controller": k.controller} for k in karts]
+    return {"race_id": race_id, "karts": listed, **vars(replay)}

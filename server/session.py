@@ -27,11 +27,12 @@ import numpy as np
 
 from controllers.base import RaceContext
 from controllers.plan import Plan
+from controllers.replay import ReplayRecorder, apply_plan_targets
 from server.broadcast import Broadcast
 from server.controller_params import build_controller, resolve_factory
 from server.db import utc_now
 from server.drivers import DriverThread, KartDriver, KartWorker
-from server.frames import ReplayRecorder, TelemetryMessage, build_frame
+from server.frames import TelemetryMessage, build_frame, replay_json
 from server.host_messages import PlannerSetup
 from server.plan_requests import PlanRequests
 from server.race_config import KartEntry, RaceConfig
@@ -138,8 +139,8 @@ class RaceSession:
         return self._telemetry.of(frame) if frame is not None else None
 
     def replay_json(self) -> dict[str, Any]:
-        """The replay so far in the headless format (``controllers.race.Replay``) plus the race id and karts."""
-        return self.replay.to_json(self.id, self.config.karts)
+        """The replay so far in the headless format (``controllers.replay.Replay``) plus the race id and karts."""
+        return replay_json(self.replay.replay(), self.id, self.config.karts)
 
     def tick_stats(self) -> TickSummary | None:
         """Tick timing (see :class:`server.ticks.TickSummary`), or ``None`` before the first tick."""
@@ -333,8 +334,7 @@ class RaceSession:
         worker = self._workers.get(d.index)
         if worker is not None:
             worker.deliver(plan)
-        for waypoint in plan.ego_waypoints:  # the referee's delta_r / delta_v targets, as in headless races
-            self.world.set_target(0, d.index, waypoint.checkpoint, waypoint.lane, waypoint.speed)
+        apply_plan_targets(self.world, 0, d.index, plan)  # the referee's delta_r / delta_v, as headless races
         d.waypoints = tuple(w.position for w in plan.ego_waypoints)
         d.predicted = tuple(w.position for ws in plan.opponent_waypoints().values() for w in ws)
         self.plans_version += 1

@@ -61,12 +61,6 @@ class KartParams:
             raise ValueError(f"wear must be in [0, 1), got {wear}")
         return float(-self.wear_yaw_scale * np.log(1.0 - wear / self.wear_gain))
 
-    def cornering_speed(self, radius: float | np.ndarray, wear: float | np.ndarray) -> float | np.ndarray:
-        """Highest steady speed [m/s] on a circle of ``radius`` [m] at tyre wear ``wear``; top speed if radius <= 0."""
-        radius = np.asarray(radius, dtype=float)
-        v = np.sqrt(self.lateral_limit(wear) * np.abs(radius))
-        return np.where(radius > 0.0, np.minimum(v, self.top_speed), self.top_speed)
-
     def throttle_for_acceleration(self, speed: float | np.ndarray, acceleration: float | np.ndarray) -> np.ndarray:
         """Throttle in [-1, 1] realising ``acceleration`` [m/s^2] at forward ``speed`` [m/s], coasting drag included
         (vectorised; the compiled :func:`sim_core.kart.throttle_for_acceleration` is the same inverse)."""
