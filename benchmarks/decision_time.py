@@ -1,7 +1,7 @@
 """Decision time of every registered controller: the slowest and the median ``act`` call in a short race start.
 
 Each controller drives kart 0 for 120 steps (2.4 s) on ``oval``, ``complex`` and ``train-oval-small-reversed``
-beside a kart that only accelerates, as ``tests/test_registry.py`` does for its contract; the first call
+beside a kart that only accelerates, as ``tests/controllers/test_registry.py`` does for its contract; the first call
 (which may compile and plan) is not counted. A hierarchical driver plans in line here, so its slowest call
 includes a re-plan. The budget is 0.5 s for any one decision (the live server gives a driver a deadline per
 tick and moves planning to a worker; a headless race has only this). Timings depend on the machine and on what

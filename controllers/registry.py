@@ -32,7 +32,7 @@ Adding a controller
     3. Write a module-level ``build(params) -> Controller`` (module level: the server pickles it to worker
        processes) and add ``_spec(name, description, build, ParamsType)`` to ``_SPECS``. Its name must be
        new; the defaults must give the controller as tuned (a race with defaults is the reference).
-    4. ``tests/test_registry.py`` then checks it resets and acts within budget on three tracks; the
+    4. ``tests/controllers/test_registry.py`` then checks it resets and acts within budget on three tracks; the
        server lists it at ``/api/controllers``.
 """
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Install Debian's chromium for the real-browser test (tests/test_browser.py), once.
+# Install Debian's chromium for the real-browser test (tests/web/test_browser.py), once.
 #
 # Playwright's own `playwright install chromium` downloads from a CDN, which is not reachable everywhere (CI
 # boxes, this project's machines); Debian's package comes from the ordinary apt mirror. Idempotent: does

@@ -1,5 +1,5 @@
 """The examples run as written: each numbered script in examples/ is run as a program (short races here) and
-its output checked. The drive client (04) needs a live server: tests/test_server_api.py runs it against one."""
+its output checked. The drive client (04) needs a live server: tests/server/test_server_api.py runs it against one."""
 
 from __future__ import annotations
 

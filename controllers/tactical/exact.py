@@ -1,5 +1,5 @@
 """Exhaustive solution of small discrete games by backward induction: the reference that the MCTS search is
-measured against (``tests/test_tactical_planner.py``, ``benchmarks/mcts_strength.py``).
+measured against (``tests/controllers/test_tactical_planner.py``, ``benchmarks/mcts_strength.py``).
 
 Every mover picks the move that maximises its own :func:`~controllers.tactical.value.terminal_values` value
 given everyone's later best responses (a subgame-perfect equilibrium). The cost grows as the number of legal

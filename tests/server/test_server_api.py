@@ -21,7 +21,7 @@ from server.db import RaceDatabase, StoredRace, utc_now
 from sim_core.params import DT
 from web.frame import KartFrame, RaceFrame
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHORT_RACE = {"track": "oval", "laps": 1, "karts": [{"controller": "lane-follower"}, {"controller": "fixed-lqng"}]}
 
 

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from sim_core.track import CENTRE_SAMPLE_SPACING, INNER_WALL_CURVATURE_MARGIN, Section, Track
 from sim_core.track_io import builtin_track_names, get_track
 
-SPEC_DIR = Path(__file__).resolve().parents[1].parent / "shared" / "spec" / "tracks"
+SPEC_DIR = Path(__file__).resolve().parents[2].parent / "shared" / "spec" / "tracks"
 BUILTINS = ("oval", "complex", "train-oval-small", "train-oval-large")
 ALL_NAMES = tuple(n for b in BUILTINS for n in (b, f"{b}-reversed"))
 LANE_OFFSETS = (3.5, 1.25, -1.25, -3.5)  # [m] left-positive, lane 1 leftmost, on a 10 m road

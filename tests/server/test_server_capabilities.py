@@ -117,7 +117,9 @@ def test_a_planning_driver_of_any_class_gets_plans_and_its_parameters(client: ht
     wait_for(planned_twice, 30, 0.1)
     client.post(f"/api/races/{race['id']}/stop")
     result = client.get(f"/api/races/{race['id']}/result").json()
-    assert result["karts"][0]["plans_applied"] >= 2 and result["karts"][0]["controller_faults"] == 0
+    kart = result["karts"][0]
+    # no errors (a missed deadline is the loaded machine's, not the driver's: the tick never waits for it)
+    assert kart["plans_applied"] >= 2 and kart["exceptions"] == kart["hangs"] == kart["planner_faults"] == 0
     replay = client.get(f"/api/races/{race['id']}/replay").json()
     assert {p["kart"] for p in replay["plans"]} == {0}  # only the composed driver plans
     throttles = {round(step[0][5], 6) for step in replay["poses"]}

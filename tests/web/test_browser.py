@@ -23,7 +23,7 @@ import httpx
 import pytest
 from support.live_server import ServerThread
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 ARTIFACTS = ROOT / "test-artifacts"
 CHROMIUM_CANDIDATES = (
     os.environ.get("KARTING_CHROMIUM", ""),
