@@ -17,9 +17,9 @@ from numba import njit
 
 from sim_core.contacts import resolve_contacts
 from sim_core.kart import kart_step, tyre_wear
-from sim_core.kernel_arrays import NO_REFCOUNT, PHASE, RayTables, StepScratch, WorldArrays, make_scratch
+from sim_core.kernel_arrays import NO_REFCOUNT, PHASE, RayTables, StepScratch, WorldArrays, scratch_views
 from sim_core.referee import advance_clock, count_passes, judge_contacts, referee_kart
-from sim_core.sensors import cast_rays, prepare_rays
+from sim_core.sensors import cast_rays
 from sim_core.state import (
     F_ACC_YAW,
     F_D,
@@ -109,7 +109,7 @@ def step_race(
         cast_rays(b, w, tr, kp, rp, rays, scratch)
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)  # views and bundles only: nothing to count
 def step_batch(
     F: np.ndarray,
     I: np.ndarray,
@@ -124,17 +124,21 @@ def step_batch(
     tr: TrackArrays,
     kp: np.ndarray,
     rp: np.ndarray,
-    ray_angles: np.ndarray,
+    rays: np.ndarray,
     sensors_on: bool,
     n_steps: int,
+    scratch_floats: np.ndarray,
+    scratch_bools: np.ndarray,
 ) -> None:
-    """Advance every race of the batch by ``n_steps`` steps with the same actions held (the fields of
-    :class:`WorldArrays` one by one: numba types a bundle passed in from Python several times slower than
-    its arrays; sensor ``ray_angles`` in radians from the heading, counter-clockwise)."""
+    """Advance every race of the batch by ``n_steps`` steps with the same actions held.
+
+    The world's arrays come one by one (numba types a bundle passed in from Python several times slower than
+    its arrays), ``rays`` is (3, rays): the :func:`sim_core.sensors.prepare_rays` tables, and the scratch
+    buffers are the world's (see :func:`sim_core.kernel_arrays.scratch_views`).
+    """
     w = WorldArrays(F, I, R, pair_flags, target_lane, target_speed, ray_dist, ray_hit, pass_start)
-    cos, sin, bins = prepare_rays(ray_angles, tr.ray_bins)
-    rays = RayTables(cos, sin, bins)
-    scratch = make_scratch(F.shape[1], ray_angles.shape[0])
+    tables = RayTables(rays[0], rays[1], rays[2])
+    scratch = scratch_views(scratch_floats, scratch_bools, F.shape[1], rays.shape[1])
     for _ in range(n_steps):
         for b in range(F.shape[0]):
-            step_race(b, w, actions, tr, kp, rp, rays, sensors_on, scratch)
+            step_race(b, w, actions, tr, kp, rp, tables, sensors_on, scratch)

@@ -12,9 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim_core import state as st
+from sim_core.kernel_arrays import scratch_sizes
 from sim_core.params import DT, SimParams
 from sim_core.rules import race_winner, safety_score
-from sim_core.sensors import sense_batch
+from sim_core.sensors import prepare_rays, sense_batch
 from sim_core.step import step_batch
 from sim_core.track import Track
 from sim_core.track_arrays import track_arrays
@@ -105,6 +106,10 @@ class World:
         self.ray_dist = np.full((n_races, n_karts, n_rays), self.params.sensors.max_range)
         self.ray_hit = np.zeros((n_races, n_karts, n_rays), dtype=np.int64)
         self._no_action = np.zeros((n_races, n_karts, 2))
+        self._rays = np.stack(prepare_rays(self.ray_angles, self.arrays.ray_bins))
+        n_floats, n_bools = scratch_sizes(n_karts, n_rays)
+        self._scratch_floats = np.full(n_floats, np.nan)
+        self._scratch_bools = np.zeros(n_bools, dtype=np.bool_)
         self.reset()
 
     def _rule_vector(self) -> np.ndarray:
@@ -269,9 +274,11 @@ class World:
             self.arrays,
             self.kart_vector,
             self.rule_vector,
-            self.ray_angles,
+            self._rays,
             self.sensors,
             n_steps,
+            self._scratch_floats,
+            self._scratch_bools,
         )
 
     def set_target(self, race: int, kart: int, checkpoint: int, lane: int | None, speed: float | None) -> None:
