@@ -15,7 +15,6 @@ import time
 import numpy as np
 
 from controllers.lane_follower import LaneFollower
-from sim_core import state as st
 from sim_core.track_io import get_track
 from sim_core.world import World
 
@@ -28,14 +27,7 @@ BATCH_STEPS = 400
 def driving_actions(world: World, follower: LaneFollower) -> np.ndarray:
     """Actions of a lane-following driver for every kart (computed once per controller update)."""
     lateral = np.where(np.arange(world.n_karts) % 2 == 0, 1.25, -1.25)[None, :]
-    return follower.act(
-        world.positions,
-        world.headings,
-        world.speeds,
-        world.fstate[:, :, st.F_S],
-        world.fstate[:, :, st.F_WEAR],
-        lateral,
-    )
+    return follower.act_on(world, lateral)
 
 
 def bench_single(track_name: str) -> float:

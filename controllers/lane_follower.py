@@ -13,9 +13,11 @@ import numpy as np
 
 from controllers.base import Action, RaceContext
 from controllers.parameters import parameter
+from sim_core import state as st
 from sim_core.observation import Observation
 from sim_core.params import SIM_HZ, KartParams
 from sim_core.track import Track
+from sim_core.world import World
 
 
 @dataclass(frozen=True)
@@ -88,6 +90,20 @@ class LaneFollower:
         # the commanded acceleration through the kart's own longitudinal model (drag included)
         throttle = self.kart.throttle_for_acceleration(speeds, p.acceleration_gain * (target - speeds))
         return np.stack([steer, throttle], axis=-1)
+
+    def act_on(
+        self, world: World, lateral_target: np.ndarray | float, speed_cap: np.ndarray | float = np.inf
+    ) -> np.ndarray:
+        """:meth:`act` for every kart of ``world``: actions (B, K, 2)."""
+        return self.act(
+            world.positions,
+            world.headings,
+            world.speeds,
+            world.fstate[:, :, st.F_S],
+            world.fstate[:, :, st.F_WEAR],
+            lateral_target,
+            speed_cap,
+        )
 
     def _frame(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         track = self.track

@@ -202,14 +202,7 @@ def test_the_lane_follower_reaches_top_speed_on_a_straight() -> None:
     follower = LaneFollower(track, world.params.kart)
     best = 0.0
     for _ in range(600):
-        actions = follower.act(
-            world.positions,
-            world.headings,
-            world.speeds,
-            world.fstate[:, :, st.F_S],
-            world.fstate[:, :, st.F_WEAR],
-            0.0,
-        )
+        actions = follower.act_on(world, 0.0)
         world.step(actions)
         best = max(best, float(world.speeds[0, 0]))
     assert best >= 14.7

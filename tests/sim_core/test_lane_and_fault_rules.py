@@ -43,15 +43,7 @@ def weave(counting: str, first_section: int, excursions: int, sections: int) -> 
         u = (s - float(track.checkpoint_s[c])) / length
         away = (c - first_section) % track.n_checkpoints < excursions and 0.05 < u < 0.45
         target = lane1 if away else lane2
-        actions = follower.act(
-            world.positions,
-            world.headings,
-            world.speeds,
-            world.fstate[:, :, st.F_S],
-            world.fstate[:, :, st.F_WEAR],
-            np.array([[target]]),
-            speed_cap=6.0,
-        )
+        actions = follower.act_on(world, np.array([[target]]), speed_cap=6.0)
         world.step(actions)
     else:
         raise AssertionError("the weave never ended")

@@ -15,14 +15,7 @@ from sim_core.world import World
 
 def drive(world: World, follower: LaneFollower, lateral: np.ndarray, stopped: tuple[int, ...] = ()) -> None:
     while not world.done.all():
-        actions = follower.act(
-            world.positions,
-            world.headings,
-            world.speeds,
-            world.fstate[:, :, st.F_S],
-            world.fstate[:, :, st.F_WEAR],
-            lateral,
-        )
+        actions = follower.act_on(world, lateral)
         for k in stopped:
             actions[:, k] = (0.0, -1.0)
         world.step(actions)
