@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controllers.rl import rewards as R
+from controllers.rl import rewards as rw
 from controllers.rl.actions import ACCELERATE, world_actions
 from controllers.rl.config import DECISION_STEPS, STACK, EnvConfig
 from controllers.rl.observations import TrackTables, build_frame, frame_size, target_indices, target_points
@@ -58,8 +58,17 @@ class StepResult:
 class RaceBatch:
     """B races of K karts spread over the configured tracks. ``step`` takes (B, K, 2) actions in [-1, 1]."""
 
-    def __init__(self, config: EnvConfig, n_races: int, seed: int | None = None, *, autoreset: bool = True) -> None:
+    def __init__(
+        self,
+        config: EnvConfig,
+        n_races: int,
+        seed: int | None = None,
+        *,
+        autoreset: bool = True,
+        learner_ends: bool = True,
+    ) -> None:
         self.config = config
+        self.learner_ends = learner_ends  # a race ends when kart 0 finishes (else when every kart has)
         self.n_races = n_races
         self.n_karts = config.n_karts
         self.autoreset = autoreset
@@ -173,7 +182,9 @@ class RaceBatch:
             block.stack[:, :, -1] = self._frame(block)
             truncated[sl] = block.world.steps >= self.config.episode_steps
             done_karts = block.world.istate[:, :, st.I_FINISHED].astype(bool)
-            ended[sl] = truncated[sl] | block.world.done | done_karts[:, 0] | done_karts.all(axis=1)
+            ended[sl] = truncated[sl] | block.world.done | done_karts.all(axis=1)
+            if self.learner_ends:
+                ended[sl] |= done_karts[:, 0]
         obs = self.observations()
         final_obs = obs.copy() if ended.any() else obs
         if self.autoreset and ended.any():
@@ -207,14 +218,14 @@ class RaceBatch:
         illegal = i[:, :, st.I_ILLEGAL_STEP]
         rays_on_me = self._rays_on_me(w)
         terms = {
-            "speed": DECISION_STEPS * R.speed_reward(wt.speed, speed, self.kart.top_speed),
-            "direction": DECISION_STEPS * R.direction_reward(wt.direction, w.positions, course, speed, target),
-            "acceleration": DECISION_STEPS * R.acceleration_reward(wt.acceleration, block.accelerating),
-            "not_at_goal": DECISION_STEPS * R.not_at_goal_penalty(wt.not_at_goal, active),
-            "swerve": R.swerve_penalty(wt.swerve, illegal - block.illegal),
-            "wall_hit": R.wall_hit_penalty(wt.wall_hit, w.ray_dist, w.ray_hit),
-            "player_hit": R.player_hit_penalty(wt.player_hit, wt.player_hit_front, w.ray_dist, w.ray_hit),
-            "hit_by_player": R.hit_by_player_penalty(wt.hit_by_player, rays_on_me),
+            "speed": DECISION_STEPS * rw.speed_reward(wt.speed, speed, self.kart.top_speed),
+            "direction": DECISION_STEPS * rw.direction_reward(wt.direction, w.positions, course, speed, target),
+            "acceleration": DECISION_STEPS * rw.acceleration_reward(wt.acceleration, block.accelerating),
+            "not_at_goal": DECISION_STEPS * rw.not_at_goal_penalty(wt.not_at_goal, active),
+            "swerve": rw.swerve_penalty(wt.swerve, illegal - block.illegal),
+            "wall_hit": rw.wall_hit_penalty(wt.wall_hit, w.ray_dist, w.ray_hit),
+            "player_hit": rw.player_hit_penalty(wt.player_hit, wt.player_hit_front, w.ray_dist, w.ray_hit),
+            "hit_by_player": rw.hit_by_player_penalty(wt.hit_by_player, rays_on_me),
         }
         block.illegal = illegal.copy()
         block.terms = terms
@@ -222,7 +233,7 @@ class RaceBatch:
 
     def _rays_on_me(self, w: World) -> np.ndarray:
         """(b, K) rays of other karts that found this kart within 1.5 m (charged to the nearest other kart)."""
-        hits = R.player_rays(w.ray_dist, w.ray_hit).sum(axis=-1)
+        hits = rw.player_rays(w.ray_dist, w.ray_hit).sum(axis=-1)
         if self.n_karts == 2:
             return hits[:, ::-1].astype(float)
         pos = w.positions
@@ -242,7 +253,7 @@ class RaceBatch:
         since = self._since(block, f, i)
         out = np.zeros(passed.shape)
         reversed_ = active & (passed == block.passed) & (block.since < t.length / 2) & (since > t.length / 2)
-        out += np.where(reversed_, R.reverse_penalty(wt.reverse, np.zeros(passed.shape)), 0.0)
+        out += np.where(reversed_, rw.reverse_penalty(wt.reverse, np.zeros(passed.shape)), 0.0)
         rows = np.arange(passed.shape[0])
         for k in range(self.n_karts):  # kart by kart: two karts may reach one checkpoint in one decision
             crossed = active[:, k] & (passed[:, k] > block.passed[:, k])
@@ -260,11 +271,11 @@ class RaceBatch:
             lane_miss = np.abs(f[r, k, st.F_D] - t.offsets[c, lane])
             speed_miss = f[r, k, st.F_CROSS_SPEED] - block.plan_speed[r, k, c]
             out[r, k] += (
-                R.checkpoint_base_reward(wt.checkpoint_base, order)
-                + R.checkpoint_time_reward(wt.checkpoint_time, order, time, self.horizon)
-                + R.behind_opponent_penalty(wt.behind_opponent, (time - first) / DT)
-                + R.target_lane_reward(wt.target_lane, lane_miss)
-                + R.target_speed_reward(wt.target_speed, speed_miss, self.config.agent == "mcts-rl")
+                rw.checkpoint_base_reward(wt.checkpoint_base, order)
+                + rw.checkpoint_time_reward(wt.checkpoint_time, order, time, self.horizon)
+                + rw.behind_opponent_penalty(wt.behind_opponent, (time - first) / DT)
+                + rw.target_lane_reward(wt.target_lane, lane_miss)
+                + rw.target_speed_reward(wt.target_speed, speed_miss, self.config.agent == "mcts-rl")
             )
         block.passed = passed
         block.since = since

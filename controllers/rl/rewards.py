@@ -73,9 +73,7 @@ def player_rays(ray_distance: np.ndarray, ray_hit: np.ndarray) -> np.ndarray:
     return (np.asarray(ray_distance) < OPPONENT_THRESHOLD) & (np.asarray(ray_hit) == HIT_KART)
 
 
-def player_hit_penalty(
-    weight: float, front_weight: float, ray_distance: np.ndarray, ray_hit: np.ndarray
-) -> np.ndarray:
+def player_hit_penalty(weight: float, front_weight: float, ray_distance: np.ndarray, ray_hit: np.ndarray) -> np.ndarray:
     """R_player-hit(w1, w2) = -sum_j (w1 1[I_j < h and ray j hit a player] + w2 1[... and j in Theta]):
     every ray within 1.5 m of another kart costs w1, a front ray (Theta: 0 and +-30 deg, the at-fault side)
     costs w2 more."""
