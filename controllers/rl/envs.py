@@ -214,7 +214,7 @@ def parallel_env(agent: str = "mcts-rl", **config: Any) -> KartRaceParallelEnv:
 
 def register_envs() -> None:
     """Register the Gymnasium ids (idempotent)."""
-    ids = {"karting/KartRace-v0": {}}
+    ids: dict[str, dict[str, str]] = {"karting/KartRace-v0": {}}
     ids.update(
         {
             f"karting/KartRace-{tag}-v0": {"agent": a}

@@ -73,6 +73,7 @@ class SelfPlayVecEnv(VecEnv):
     """The training races for SB3: one learning kart per race (kart 0), the others driven by ``opponent``."""
 
     def __init__(self, batch: RaceBatch, opponent: Any) -> None:
+        self.render_mode = None
         super().__init__(batch.n_races, observation_space(batch), action_space())
         self.batch = batch
         self.opponent = opponent
@@ -118,7 +119,7 @@ class SelfPlayVecEnv(VecEnv):
 
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
         """The batch's attribute, once per race."""
-        return [getattr(self.batch, attr_name)] * len(self._get_indices(indices))
+        return [getattr(self.batch, attr_name)] * len(list(self._get_indices(indices)))
 
     def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
         """Set a batch attribute."""
@@ -130,4 +131,4 @@ class SelfPlayVecEnv(VecEnv):
 
     def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
         """No gym wrappers inside."""
-        return [False] * len(self._get_indices(indices))
+        return [False] * len(list(self._get_indices(indices)))

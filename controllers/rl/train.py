@@ -18,7 +18,9 @@ from pathlib import Path
 import numpy as np
 import torch
 from stable_baselines3 import PPO
+from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.running_mean_std import RunningMeanStd
 from stable_baselines3.common.vec_env import VecNormalize
 
 from controllers.rl.batch import RaceBatch
@@ -62,6 +64,7 @@ class SelfPlayCallback(BaseCallback):
 
     def _snapshot(self) -> None:
         rms = self.norm.obs_rms
+        assert isinstance(rms, RunningMeanStd)
         self.pool.add(self.model.policy, rms.mean, rms.var, self.num_timesteps)  # type: ignore[arg-type]
 
     def _on_step(self) -> bool:
@@ -81,7 +84,7 @@ class SelfPlayCallback(BaseCallback):
         values = self.model.logger.name_to_value
         if "train/value_loss" not in values:
             return
-        episodes = list(self.model.ep_info_buffer)
+        episodes = list(self.model.ep_info_buffer or ())
         row = {
             "timesteps": self.num_timesteps,
             "wall_s": round(time.perf_counter() - self.start, 2),
@@ -100,7 +103,7 @@ class SelfPlayCallback(BaseCallback):
             writer.writerow(row)
 
 
-def save(model: PPO, norm: VecNormalize, folder: Path) -> None:
+def save(model: BaseAlgorithm, norm: VecNormalize, folder: Path) -> None:
     """The model and its normalisation statistics into ``folder``."""
     folder.mkdir(parents=True, exist_ok=True)
     model.save(folder / MODEL)

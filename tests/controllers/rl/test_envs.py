@@ -25,7 +25,7 @@ def test_registered_ids_make_single_and_vector_envs() -> None:
     assert env.observation_space.contains(obs)
     envs = gym.make_vec("karting/KartRace-v0", num_envs=8, vectorization_mode="vector_entry_point", agent="e2e")
     obs, _ = envs.reset(seed=1)
-    assert obs.shape == (8, *envs.single_observation_space.shape)
+    assert obs.shape == (8, 220)
 
 
 def test_vector_env_spaces_autoreset_and_episode_info() -> None:
@@ -49,7 +49,7 @@ def test_vector_env_spaces_autoreset_and_episode_info() -> None:
 def test_seeded_batch_is_deterministic() -> None:
     def run() -> tuple[np.ndarray, np.ndarray]:
         batch = RaceBatch(make_config("mcts-rl"), 8, seed=11)
-        obs = batch.reset()
+        batch.reset()
         rng = np.random.default_rng(5)
         total = np.zeros((8, 2))
         for _ in range(60):
