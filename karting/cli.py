@@ -151,10 +151,6 @@ def serve(
     run_server(Settings(**overrides))  # type: ignore[arg-type]
 
 
-if __name__ == "__main__":
-    app()
-
-
 @app.command()
 def train(
     agent: Annotated[str, typer.Argument(help="mcts-rl, fixed-rl or e2e")],
@@ -181,3 +177,7 @@ def train(
         f"{kind}: {result.timesteps} steps in {result.wall_s:.0f} s ({result.env_steps_per_s:,.0f} env steps/s); "
         f"model, statistics, log and curves in {result.out}"
     )
+
+
+if __name__ == "__main__":
+    app()
