@@ -151,5 +151,33 @@ def serve(
     run_server(Settings(**overrides))  # type: ignore[arg-type]
 
 
+@app.command()
+def train(
+    agent: Annotated[str, typer.Argument(help="mcts-rl, fixed-rl or e2e")],
+    out: Annotated[Path | None, typer.Option(help="output folder (default results/rl/AGENT)")] = None,
+    steps: Annotated[int, typer.Option(help="environment steps in all (the paper: 8M)")] = 8_000_000,
+    races: Annotated[int, typer.Option(help="races simulated together, one learning kart each")] = 128,
+    seed: Annotated[int, typer.Option()] = 0,
+    checkpoint_steps: Annotated[int, typer.Option(help="a checkpoint every this many steps")] = 500_000,
+    resume: Annotated[bool, typer.Option(help="continue from the model in OUT")] = False,
+    threads: Annotated[int, typer.Option(help="torch threads (1 is fastest on a shared 2-core machine)")] = 1,
+) -> None:
+    """Train an RL agent by PPO self-play on the training ovals (progress bar, checkpoints, log and curves)."""
+    from controllers.rl.config import PPOConfig, agent_kind
+    from controllers.rl.envs import make_config
+    from controllers.rl.train import train as run_training
+
+    kind = agent_kind(agent)
+    folder = out or Path("results") / "rl" / kind
+    ppo = PPOConfig(
+        total_steps=steps, n_races=races, seed=seed, checkpoint_steps=checkpoint_steps, torch_threads=threads
+    )
+    result = run_training(make_config(kind), ppo, folder, resume=resume, progress_bar=True)
+    console.print(
+        f"{kind}: {result.timesteps} steps in {result.wall_s:.0f} s ({result.env_steps_per_s:,.0f} env steps/s); "
+        f"model, statistics, log and curves in {result.out}"
+    )
+
+
 if __name__ == "__main__":
     app()

@@ -1,0 +1,53 @@
+"""Environment steps per second during PPO self-play training (``karting train``'s loop) on this machine.
+
+Runs a short training of MCTS-RL (warm-up excluded: the first update pays for compiling the kernels) and prints
+one JSON object last, with ``env_steps_per_s`` (learner decisions per second of wall time, the count that
+Stable-Baselines3's ``total_timesteps`` and the paper's 8M steps use).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+
+from controllers.rl.config import PPOConfig
+from controllers.rl.envs import make_config
+from controllers.rl.train import train
+
+
+def main() -> None:
+    """Warm up, then time a training run."""
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--steps", type=int, default=153_600)
+    parser.add_argument("--races", type=int, default=128)
+    parser.add_argument("--threads", type=int, default=1)
+    args = parser.parse_args()
+    env = make_config("mcts-rl")
+    with tempfile.TemporaryDirectory() as tmp:
+        warm = PPOConfig(total_steps=10_240, n_races=args.races, torch_threads=args.threads)
+        train(env, warm, Path(tmp) / "warm")
+        ppo = PPOConfig(total_steps=args.steps, n_races=args.races, torch_threads=args.threads)
+        start = time.perf_counter()
+        result = train(env, ppo, Path(tmp) / "run")
+        total = time.perf_counter() - start
+    print(
+        json.dumps(
+            {
+                "benchmark": "training",
+                "agent": "mcts-rl",
+                "races": args.races,
+                "torch_threads": args.threads,
+                "steps": result.timesteps,
+                "learn_s": round(result.wall_s, 2),
+                "total_s": round(total, 2),
+                "env_steps_per_s": round(result.env_steps_per_s),
+            }
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,188 @@
+"""``karting train AGENT``: PPO (Stable-Baselines3) with self-play on the training ovals.
+
+The spec's defaults (:class:`controllers.rl.config.PPOConfig`): 3x128 tanh policy and value networks, lr 2e-4
+decaying linearly, minibatch 512, a 10240-step buffer, 3 epochs, gamma 0.99, lambda 0.95, clip 0.2, entropy
+5e-3, running observation normalisation (VecNormalize); a pool of 10 frozen past policies, a snapshot every
+20k steps, the opponent swapped every 10k, half the games against the latest. The output folder holds the
+model (``model.zip``), the normalisation statistics (``vecnormalize.pkl``), periodic checkpoints, the log
+(``training_log.csv``) and its curves (``curves.png``); training resumes from it.
+"""
+
+from __future__ import annotations
+
+import csv
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+from stable_baselines3 import PPO
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.running_mean_std import RunningMeanStd
+from stable_baselines3.common.vec_env import VecNormalize
+
+from controllers.rl.batch import RaceBatch
+from controllers.rl.config import EnvConfig, PPOConfig
+from controllers.rl.curves import LOG_FIELDS, plot_curves
+from controllers.rl.selfplay import OpponentPool, SelfPlayVecEnv
+
+MODEL, NORMALISER, LOG, CURVES = "model.zip", "vecnormalize.pkl", "training_log.csv", "curves.png"
+
+
+@dataclass
+class TrainResult:
+    """Where a training run left its files, and how fast it went."""
+
+    out: Path
+    timesteps: int
+    wall_s: float
+    env_steps_per_s: float
+    log: Path = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.log = self.out / LOG
+
+
+class SelfPlayCallback(BaseCallback):
+    """Snapshots into the pool, opponent swaps, the log row after every update and periodic checkpoints."""
+
+    def __init__(self, pool: OpponentPool, norm: VecNormalize, ppo: PPOConfig, out: Path) -> None:
+        super().__init__()
+        self.pool, self.norm, self.ppo, self.out = pool, norm, ppo, out
+        self.next_save = self.next_swap = self.next_checkpoint = 0
+        self.start = time.perf_counter()
+        self.start_steps = 0
+
+    def _on_training_start(self) -> None:
+        n = self.num_timesteps
+        self.start_steps = n
+        self.next_save, self.next_swap = n + self.ppo.save_steps, n + self.ppo.swap_steps
+        self.next_checkpoint = n + self.ppo.checkpoint_steps
+        self._snapshot()
+
+    def _snapshot(self) -> None:
+        rms = self.norm.obs_rms
+        assert isinstance(rms, RunningMeanStd)
+        self.pool.add(self.model.policy, rms.mean, rms.var, self.num_timesteps)  # type: ignore[arg-type]
+
+    def _on_step(self) -> bool:
+        n = self.num_timesteps
+        if n >= self.next_save:
+            self._snapshot()
+            self.next_save += self.ppo.save_steps
+        if n >= self.next_swap:
+            self.pool.swap()
+            self.next_swap += self.ppo.swap_steps
+        if n >= self.next_checkpoint:
+            save(self.model, self.norm, self.out / "checkpoints" / f"step_{n}")
+            self.next_checkpoint += self.ppo.checkpoint_steps
+        return True
+
+    def _on_rollout_start(self) -> None:
+        values = self.model.logger.name_to_value
+        if "train/value_loss" not in values:
+            return
+        episodes = list(self.model.ep_info_buffer or ())
+        row = {
+            "timesteps": self.num_timesteps,
+            "wall_s": round(time.perf_counter() - self.start, 2),
+            "ep_rew_mean": np.mean([e["r"] for e in episodes]) if episodes else "",
+            "ep_len_mean": np.mean([e["l"] for e in episodes]) if episodes else "",
+            "value_loss": values.get("train/value_loss", ""),
+            "policy_loss": values.get("train/policy_gradient_loss", ""),
+            "entropy": values.get("train/entropy_loss", ""),
+        }
+        log = self.out / LOG
+        new = not log.exists()
+        with log.open("a", newline="") as fh:
+            writer = csv.DictWriter(fh, fieldnames=LOG_FIELDS)
+            if new:
+                writer.writeheader()
+            writer.writerow(row)
+
+
+def save(model: BaseAlgorithm, norm: VecNormalize, folder: Path) -> None:
+    """The model and its normalisation statistics into ``folder``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    model.save(folder / MODEL)
+    norm.save(str(folder / NORMALISER))
+
+
+def make_model(venv: VecNormalize, ppo: PPOConfig) -> PPO:
+    """A fresh PPO with the spec's settings."""
+    n_steps = max(ppo.buffer_size // venv.num_envs, 1)
+    return PPO(
+        "MlpPolicy",
+        venv,
+        learning_rate=lambda remaining: ppo.learning_rate * remaining,
+        n_steps=n_steps,
+        batch_size=min(ppo.batch_size, n_steps * venv.num_envs),
+        n_epochs=ppo.n_epochs,
+        gamma=ppo.gamma,
+        gae_lambda=ppo.gae_lambda,
+        clip_range=ppo.clip_range,
+        ent_coef=ppo.ent_coef,
+        policy_kwargs={"net_arch": {"pi": list(ppo.hidden), "vf": list(ppo.hidden)}, "activation_fn": torch.nn.Tanh},
+        seed=ppo.seed,
+        device="cpu",
+        verbose=0,
+    )
+
+
+def train(
+    env: EnvConfig, ppo: PPOConfig, out: Path, *, resume: bool = False, progress_bar: bool = False
+) -> TrainResult:
+    """Train ``env.agent`` to ``ppo.total_steps`` environment steps (resuming from ``out`` when asked and a
+    model is there), write the model, statistics, log and curves into ``out``."""
+    torch.set_num_threads(ppo.torch_threads)
+    out.mkdir(parents=True, exist_ok=True)
+    pool = OpponentPool(ppo.window, ppo.play_against_latest, ppo.seed + 1)
+    raw = SelfPlayVecEnv(RaceBatch(env, ppo.n_races), pool)
+    raw.seed(ppo.seed)
+    resuming = resume and (out / MODEL).exists()
+    if resuming:
+        venv = VecNormalize.load(str(out / NORMALISER), raw)
+        venv.training = True
+        model = PPO.load(out / MODEL, env=venv, device="cpu")
+    else:
+        (out / LOG).unlink(missing_ok=True)
+        venv = VecNormalize(raw, norm_obs=True, norm_reward=False, clip_obs=10.0, gamma=ppo.gamma)
+        model = make_model(venv, ppo)
+    callback = SelfPlayCallback(pool, venv, ppo, out)
+    remaining = max(ppo.total_steps - model.num_timesteps, 0)
+    start_steps, start = model.num_timesteps, time.perf_counter()
+    if remaining:
+        model.learn(remaining, callback=callback, reset_num_timesteps=not resuming, progress_bar=progress_bar)
+    wall = time.perf_counter() - start
+    save(model, venv, out)
+    if (out / LOG).exists():
+        plot_curves(out / LOG, out / CURVES, title=f"{env.agent}: PPO self-play")
+    done = model.num_timesteps - start_steps
+    return TrainResult(out, model.num_timesteps, wall, done / wall if wall > 0 else 0.0)
+
+
+def policy_actions(model: PPO, norm: VecNormalize, deterministic: bool = True):  # type: ignore[no-untyped-def]
+    """A function from raw observations (n, D) to actions (n, 2) of a trained model."""
+
+    def act(obs: np.ndarray) -> np.ndarray:
+        actions, _ = model.predict(norm.normalize_obs(obs.astype(np.float32)), deterministic=deterministic)
+        return np.clip(actions, -1.0, 1.0)
+
+    return act
+
+
+def mean_decision_reward(env: EnvConfig, act, n_races: int, decisions: int, seed: int) -> float:  # type: ignore[no-untyped-def]
+    """Mean reward per decision of kart 0 driven by ``act`` (the other karts random), over seeded spawns."""
+    batch = RaceBatch(env, n_races, seed=seed)
+    obs = batch.reset()
+    rng = np.random.default_rng(seed + 1)
+    total = 0.0
+    for _ in range(decisions):
+        joint = rng.uniform(-1.0, 1.0, (n_races, batch.n_karts, 2))
+        joint[:, 0] = act(obs[:, 0])
+        result = batch.step(joint)
+        obs = result.obs
+        total += float(result.reward[:, 0].mean())
+    return total / decisions
