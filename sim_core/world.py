@@ -238,14 +238,31 @@ class World:
             return [races]
         return list(races)
 
-    def sense(self) -> None:
-        """Cast every kart's rays now (``reset`` does; call it after moving karts by hand with ``place_kart``)."""
-        if self.sensors:
+    def sense(self, races: int | list[int] | np.ndarray | None = None) -> None:
+        """Cast the rays of every kart of ``races`` (all by default) now: ``reset`` does; call it after moving
+        karts by hand with ``place_kart``."""
+        if not self.sensors:
+            return
+        selected = range(self.n_races) if races is None else np.atleast_1d(np.asarray(races, dtype=np.int64))
+        if races is None:
             sense_batch(
                 self.fstate,
                 self.istate,
                 self.ray_dist,
                 self.ray_hit,
+                self.arrays,
+                self.kart_vector,
+                self.rule_vector,
+                self.ray_angles,
+            )
+            return
+        for b in selected:  # one race's rows are views: written in place
+            one = slice(int(b), int(b) + 1)
+            sense_batch(
+                self.fstate[one],
+                self.istate[one],
+                self.ray_dist[one],
+                self.ray_hit[one],
                 self.arrays,
                 self.kart_vector,
                 self.rule_vector,

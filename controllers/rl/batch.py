@@ -18,7 +18,6 @@ from controllers.rl.observations import TrackTables, build_frame, frame_size, ta
 from controllers.rl.spawns import random_plan, spawn_race
 from sim_core import state as st
 from sim_core.params import DT, RuleParams, SimParams, kart_preset
-from sim_core.sensors import sense_batch
 from sim_core.track_io import get_track
 from sim_core.world import World
 
@@ -142,13 +141,7 @@ class RaceBatch:
         block.stack[races] = frame[:, :, None, :]
 
     def _sense(self, block: Block, races: np.ndarray) -> None:
-        w = block.world
-        for b in races:  # only the races that were reset (slices of the packed arrays, written in place)
-            sl = slice(int(b), int(b) + 1)
-            sense_batch(
-                w.fstate[sl], w.istate[sl], w.ray_dist[sl], w.ray_hit[sl], w.arrays, w.kart_vector, w.rule_vector,
-                w.ray_angles,
-            )  # fmt: skip
+        block.world.sense(races)  # only the races that were reset
 
     @staticmethod
     def _since(block: Block, f: np.ndarray, i: np.ndarray) -> np.ndarray:
