@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -69,8 +70,14 @@ def _targets_from(world: World, kart: int, plan: Plan) -> None:
         world.set_target(0, kart, waypoint.checkpoint, waypoint.lane, waypoint.speed)
 
 
-def run_race(spec: RaceSpec, *, record: bool = False) -> RaceOutcome:
-    """Race ``spec`` to the end (everyone finished or the time limit) and return the result."""
+StepHook = Callable[[World, Sequence[Controller], int], None]
+
+
+def run_race(spec: RaceSpec, *, record: bool = False, on_step: StepHook | None = None) -> RaceOutcome:
+    """Race ``spec`` to the end (everyone finished or the time limit) and return the result.
+
+    ``on_step(world, drivers, step)`` is called after every simulation step (measurements, e.g.
+    :class:`controllers.race_metrics.RaceMetrics`)."""
     track = load_any_track(spec.track)
     params = SimParams(kart=kart_preset(spec.kart_preset))
     n = len(spec.controllers)
@@ -100,6 +107,8 @@ def run_race(spec: RaceSpec, *, record: bool = False) -> RaceOutcome:
                         if replay is not None:
                             replay.plans.append({"step": step, "kart": k, "plan": asdict(driver.active_plan)})
         world.step(actions)
+        if on_step is not None:
+            on_step(world, drivers, step)
         if replay is not None:
             replay.poses.append(
                 [

@@ -12,6 +12,7 @@ import statistics
 import typer
 
 from controllers.race import RaceSpec, run_race
+from controllers.race_metrics import RaceMetrics
 
 app = typer.Typer(add_completion=False)
 
@@ -39,14 +40,24 @@ def main(
             "delta_r": [],
             "delta_v": [],
             "time": [],
+            "passes": [],
         }
         for _ in names
     ]
+    right, judged, shortest = [0] * len(names), [0] * len(names), [99] * len(names)
     for i in range(races):
         seed = first_seed + i
         lanes = (2, 3) if i % 2 == 0 else (3, 2)
-        outcome = run_race(RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes))
+        metrics = RaceMetrics(len(names))
+        outcome = run_race(RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes), on_step=metrics)
         result = outcome.result
+        for predictor, kart, checkpoint, lane in metrics.predictions:
+            actual = metrics.crossings.get((kart, checkpoint))
+            if actual is not None:
+                judged[predictor] += 1
+                right[predictor] += int(actual == lane)
+        for k, fewest in metrics.shortest_plan.items():
+            shortest[k] = min(shortest[k], fewest)
         if result.winner is not None:
             wins[result.winner] += 1
         for k, kart in enumerate(result.karts):
@@ -63,9 +74,11 @@ def main(
                 stats["delta_v"].append(kart.delta_v)
             if kart.finish_time is not None:
                 stats["time"].append(kart.finish_time)
+            stats["passes"].append(metrics.passes[k])
         figures = [
             f"{names[k]} {kart.finish_time or float('nan'):.2f}s "
-            f"f{kart.collisions_at_fault} i{kart.illegal_lane_changes_per_step}/{kart.illegal_lane_changes_checkpoint}"
+            f"f{kart.collisions_at_fault} i{kart.illegal_lane_changes_per_step}/{kart.illegal_lane_changes_checkpoint} "
+            f"p{metrics.passes[k]}"
             for k, kart in enumerate(result.karts)
         ]
         print(f"race {i:3d} seed {seed} lanes {lanes} winner {result.winner} | " + " | ".join(figures), flush=True)
@@ -78,6 +91,10 @@ def main(
     for k, name in enumerate(names):
         stats = per_kart[k]
         summary[name] = {key: round(statistics.fmean(values), 3) if values else None for key, values in stats.items()}
+        if judged[k]:
+            summary[name]["prediction_accuracy"] = round(right[k] / judged[k], 3)
+            summary[name]["predictions_judged"] = judged[k]
+            summary[name]["fewest_plan_waypoints"] = shortest[k]
     print(json.dumps(summary))
 
 

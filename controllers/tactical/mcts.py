@@ -34,7 +34,10 @@ def _round_of(state: np.ndarray, start_round: int, final_round: int) -> int:
 def _fastest_move(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins: int) -> int:
     """The legal move with the earliest arrival (then the smaller lane change), or -1 if none."""
     action, best_key = -1, 1 << 60
+    only = rules.allowed_lane(tb, state, p)
     for lane in range(n_lanes):
+        if only >= 0 and lane != only:
+            continue
         # a higher arrival speed never arrives later, so the first legal bin from the top is this lane's fastest
         for vbin in range(bins - 1, -1, -1):
             arrival, _, ok = rules.move_outcome(tb, state, p, lane, vbin)
@@ -60,7 +63,8 @@ def _rollout(
     """Play the game to the horizon from ``state`` (modified in place) and write every player's value.
 
     The mover takes its fastest legal move (earliest arrival, then the smaller lane change) with probability
-    ``greedy``, otherwise a uniformly random legal one. A player with no legal move loses (0), the others win (1).
+    ``greedy``, otherwise a uniformly random legal one; a modelled player always takes its fastest move into
+    its predicted lane. A player with no legal move loses (0), the others win (1).
     """
     bins = tb.bin_low.shape[0]
     n_lanes = tb.distance.shape[1]
@@ -72,7 +76,8 @@ def _rollout(
             r += 1
             continue
         action = -1
-        if np.random.random() < greedy:
+        # a modelled player follows its model: the fastest move into its predicted lane
+        if state[p, rules.MODELLED] != 0 or np.random.random() < greedy:
             action = _fastest_move(tb, state, p, n_lanes, bins)
         else:
             # rejection sampling is uniform over the legal moves and usually needs one or two draws
@@ -99,8 +104,8 @@ def _rollout(
 def greedy_line(tb: GameTables, state: np.ndarray, round_cp: int, final_round: int, out: np.ndarray) -> int:
     """Continue ``state`` (in place) to the horizon with every player taking its fastest legal move.
 
-    Writes the moves as rows [player, action] into ``out`` and returns how many were played (it stops early
-    if a player is stuck).
+    Writes the moves as rows [player, action] into ``out`` and returns how many were played. A stuck player
+    other than the ego (row 0) leaves the game (a row [player, -1]); a stuck ego stops the line.
     """
     bins = tb.bin_low.shape[0]
     n_lanes = tb.distance.shape[1]
@@ -113,7 +118,13 @@ def greedy_line(tb: GameTables, state: np.ndarray, round_cp: int, final_round: i
             continue
         action = _fastest_move(tb, state, p, n_lanes, bins)
         if action < 0:
-            return count
+            if p == 0:
+                return count  # the ego (row 0) is stuck
+            state[p, rules.CHECKPOINT] = -1  # another stuck player leaves the game (row [p, -1]); the others go on
+            out[count, 0] = p
+            out[count, 1] = -1
+            count += 1
+            continue
         rules.apply_move(tb, state, p, action)
         out[count, 0] = p
         out[count, 1] = action
