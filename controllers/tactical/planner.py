@@ -63,7 +63,7 @@ class TacticalPlanner:
         self.params = params or GameParams()
         self.tables: GameTables = build_tables(track, kart, self.params, lane_limit)
         if line is not None:
-            self.tables = calibrate_tables(self.tables, track, line)
+            self.tables = calibrate_tables(self.tables, track, line, kart)
         self.iterations = iterations
         self.seed = seed
         self.exploration = exploration
