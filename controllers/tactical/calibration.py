@@ -66,8 +66,14 @@ def shifted_line_times(track: Track, line: RacingLine, kart: KartParams) -> tupl
     return shifts, times
 
 SHIFT_STEP = 0.25  # [m] grid of the sideways shifts of the line that are timed
-WALL_CLEARANCE = 0.5  # [m] a shifted path keeps this far inside the walls
-LANE_CHANGE_COST = 0.02  # [s/m] change of the lateral distance from the line between the section's checkpoints
+WALL_CLEARANCE = 1.0  # [m] a shifted path keeps this far inside the walls (the racing line's own margin)
+# the tracker drives an off-line lane as kinked blends between lane points, not as a smooth shifted line: the
+# shifted line's extra time, times this, is what a lane off the line costs in a race
+TRACKING_FACTOR = 2.0
+# change of the lateral distance from the line between the section's checkpoints: [s/m] and [s/m^2] (a large
+# shift within one section needs more lateral grip than the kart has to spare, so it costs more than linearly)
+LANE_CHANGE_COST = 0.02
+LANE_CHANGE_COST_SQ = 0.01
 MIN_PENALTY = -0.1  # [s] a shifted line is never credited more than this on one section
 REFERENCE_WEAR = 0.25  # tyre wear the equivalent cornering radius is taken at (the race's start)
 OPEN_RADIUS = 1.0e4  # [m] a curve the line takes at top speed
@@ -108,7 +114,8 @@ def calibrate_tables(tables: GameTables, track: Track, line: RacingLine, kart: K
         for i in range(lanes):
             for j in range(lanes):
                 change = abs(dev_out[j] - dev_in[i])
-                seconds = max(0.5 * (extra_in[i] + extra_out[j]), MIN_PENALTY) + LANE_CHANGE_COST * change
+                offline = TRACKING_FACTOR * 0.5 * (extra_in[i] + extra_out[j])
+                seconds = max(offline, MIN_PENALTY) + LANE_CHANGE_COST * change + LANE_CHANGE_COST_SQ * change**2
                 penalty[c, i, j] = seconds * TIME_UNITS_PER_S
                 if not straight:
                     distance[c, i, j] = math.hypot(length, 0.0)

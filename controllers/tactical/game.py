@@ -34,6 +34,9 @@ class GameParams:
     # anywhere along a section (sampled) is a collision: a kart length (2 m) plus a margin; 0 disables it
     collision_distance: float = 3.0
     lateral_clearance: float = 1.5  # [m] a kart width (0.9 m) plus a margin
+    # [m] a kart still to move (behind in time) constrains the one moving first only when this close along the
+    # track (alongside, overlapping): the leader need not yield to a follower, who must keep its distance
+    alongside_distance: float = 2.0
     collision_pruning: bool = True  # the paper's rule (the original had it switched off)
     value_scale: float = 1.0  # [s] time advantage that maps to a value of 1 (0.5 = level)
     section_window: int = 2  # opponents fewer than this many checkpoints away are players in the game
@@ -70,6 +73,7 @@ class GameTables(NamedTuple):
     predicted_lane: np.ndarray  # (N,) 0-based lane a modelled (line-following) player takes at checkpoint c; -1 none
     collision_distance: float  # [m] 0 disables the along-the-section check
     lateral_clearance: float  # [m]
+    alongside_distance: float  # [m]
 
 
 def velocity_bins(params: GameParams, top_speed: float) -> tuple[np.ndarray, np.ndarray]:
@@ -130,4 +134,5 @@ def build_tables(track: Track, kart: KartParams, params: GameParams, lane_limit:
         predicted_lane=np.full(n, -1, dtype=np.int64),
         collision_distance=float(params.collision_distance) if params.collision_pruning else 0.0,
         lateral_clearance=float(params.lateral_clearance),
+        alongside_distance=float(params.alongside_distance),
     )

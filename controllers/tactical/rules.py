@@ -70,20 +70,31 @@ def next_player(state: np.ndarray, round_checkpoint: int) -> int:
 
 @njit(cache=True)
 def _too_close(
-    tb: GameTables, c: int, t0: float, t1: float, l0: float, l1: float, u0: float, u1: float, m0: float, m1: float
+    tb: GameTables,
+    c: int,
+    t0: float,
+    t1: float,
+    l0: float,
+    l1: float,
+    u0: float,
+    u1: float,
+    m0: float,
+    m1: float,
+    window: float,
 ) -> bool:
     """Whether two karts come within the collision window anywhere along section ``c``.
 
     One kart goes from lateral offset ``l0`` at time ``t0`` to ``l1`` at ``t1``, the other from ``m0`` at ``u0``
     to ``m1`` at ``u1`` (times in 0.01 s). Both are interpolated linearly along the section; at each sampled
-    point the time gap at the same place times the first kart's mean speed is their distance along the track.
+    point the time gap at the same place times the first kart's mean speed is their distance along the track,
+    a collision when under ``window`` [m] with the lateral distance under the clearance.
     """
     speed = tb.distance[c, 0, 0] / max((t1 - t0) / 100.0, 1e-3)
     for k in range(COLLISION_SAMPLES):
         f = k / (COLLISION_SAMPLES - 1)
         gap = abs((t0 + f * (t1 - t0)) - (u0 + f * (u1 - u0))) / 100.0
         lateral = abs((l0 + f * (l1 - l0)) - (m0 + f * (m1 - m0)))
-        if lateral < tb.lateral_clearance and gap * speed < tb.collision_distance:
+        if lateral < tb.lateral_clearance and gap * speed < window:
             return True
     return False
 
@@ -93,8 +104,9 @@ def _collides(tb: GameTables, state: np.ndarray, p: int, lane: int, arrival: int
     """Whether player ``p`` driving to ``lane`` (arriving at ``arrival``) comes too close to another player.
 
     Against a player who already drove this section (this round): its actual path. Against one still at the
-    checkpoint (behind in time, about to move): that it holds its lane at the same pace, so that nobody moves
-    across a kart alongside (the referee's alongside rule).
+    checkpoint (behind in time, about to move): that it holds its lane at the same pace, within the shorter
+    alongside window, so that nobody moves across a kart alongside (the referee's alongside rule) while a
+    leader need not yield to a kart behind it.
     """
     n = tb.straight.shape[0]
     c = state[p, CHECKPOINT] % n
@@ -108,13 +120,15 @@ def _collides(tb: GameTables, state: np.ndarray, p: int, lane: int, arrival: int
         if state[q, CHECKPOINT] == state[p, CHECKPOINT] + 1:
             u0, u1 = float(state[q, PREV_TIME]), float(state[q, TIME])
             m0, m1 = tb.lane_offset[c, state[q, PREV_LANE]], tb.lane_offset[nxt, state[q, LANE]]
+            window = tb.collision_distance
         elif state[q, CHECKPOINT] == state[p, CHECKPOINT]:
             u0 = float(state[q, TIME])
             u1 = u0 + (arrival - t0)
             m0, m1 = tb.lane_offset[c, state[q, LANE]], tb.lane_offset[nxt, state[q, LANE]]
+            window = tb.alongside_distance
         else:
             continue
-        if _too_close(tb, c, t0, float(arrival), l0, l1, u0, u1, m0, m1):
+        if _too_close(tb, c, t0, float(arrival), l0, l1, u0, u1, m0, m1, window):
             return True
     return False
 
