@@ -50,6 +50,17 @@ def _fastest_move(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins:
 
 
 @njit(cache=True)
+def _stuck_values(state: np.ndarray, p: int, values: np.ndarray) -> None:
+    """Values when player ``p`` has no legal move: it loses (0) and the others win (1), unless it is a modelled
+    player. Then nobody gains (0.5 each): the model's line follower would brake or swerve rather than stop,
+    and shutting it in must not look like a win (it made the search block and slow down)."""
+    for q in range(state.shape[0]):
+        values[q] = 0.5 if state[p, rules.MODELLED] != 0 else 1.0
+    if state[p, rules.MODELLED] == 0:
+        values[p] = 0.0
+
+
+@njit(cache=True)
 def _rollout(
     tb: GameTables,
     state: np.ndarray,
@@ -64,7 +75,7 @@ def _rollout(
 
     The mover takes its fastest legal move (earliest arrival, then the smaller lane change) with probability
     ``greedy``, otherwise a uniformly random legal one; a modelled player always takes its fastest move into
-    its predicted lane. A player with no legal move loses (0), the others win (1).
+    its predicted lane. A player with no legal move ends the game (:func:`_stuck_values`).
     """
     bins = tb.bin_low.shape[0]
     n_lanes = tb.distance.shape[1]
@@ -92,9 +103,7 @@ def _rollout(
                 if count > 0:
                     action = moves[np.random.randint(0, count)]
         if action < 0:
-            for q in range(state.shape[0]):
-                values[q] = 1.0
-            values[p] = 0.0
+            _stuck_values(state, p, values)
             return
         rules.apply_move(tb, state, p, action)
     terminal_values(tb, state, reference, values)
@@ -285,9 +294,7 @@ def search(
         # ---- simulation
         if tree_mover[node] != rules.NO_PLAYER and tree_untried_count[node] == 0 and tree_first_child[node] == NO_NODE:
             # the player to move is stuck
-            for q in range(players):
-                values[q] = 1.0
-            values[tree_mover[node]] = 0.0
+            _stuck_values(tree_state[node], tree_mover[node], values)
         else:
             scratch[:, :] = tree_state[node]
             _rollout(tb, scratch, tree_round[node], final_round, greedy, moves, reference, values)
