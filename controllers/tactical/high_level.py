@@ -24,7 +24,10 @@ from sim_core.observation import KartView, Observation
 from sim_core.rules import lane_change_update
 from sim_core.track import Track
 
-INTERACTION_WINDOW = 1.0  # [s] another kart predicted at a checkpoint this close in time makes it tactical
+INTERACTION_WINDOW = 1.0  # [s] another kart predicted at a checkpoint this much earlier makes it tactical
+# [s] ... or this much later: a kart behind by more than about a kart length cannot be blocked without losing
+# time (it must keep its distance, the follower's duty), so a leader defends by driving the racing line
+BEHIND_WINDOW = 0.15
 
 
 def _lanes_legal(track: Track, lane: int, count: int, waypoints: list[Waypoint], limit: int) -> bool:
@@ -138,7 +141,8 @@ class MCTSPlanner:
         return plan
 
     def _prefer_racing_line(self, plan: Plan, lane: int, count: int) -> Plan:
-        """``plan`` with every non-tactical ego waypoint moved to the racing line's lane where that is legal."""
+        """``plan`` with every non-tactical ego waypoint moved to the racing line's lane where that is legal,
+        at top speed (the tracker then drives the line's speed profile)."""
         assert self._context is not None
         track = self._context.track
         limit = self._context.lane_change_limit
@@ -147,8 +151,12 @@ class MCTSPlanner:
         for i, w in enumerate(waypoints):
             line_lane = self._line_lanes[w.checkpoint % track.n_checkpoints]
             tactical = any(
-                o.checkpoint == w.checkpoint and abs(o.time - w.time) < INTERACTION_WINDOW for o in opponents
+                o.checkpoint == w.checkpoint and -INTERACTION_WINDOW < o.time - w.time < BEHIND_WINDOW
+                for o in opponents
             )
+            if not tactical:
+                # the racing line's speed profile (the tracker's) binds, not the game's coarse speed bins
+                waypoints[i] = w = replace(w, speed=self._context.kart.top_speed)
             if line_lane != w.lane and not tactical:
                 point = track.lane_point(w.checkpoint, line_lane)
                 snapped = replace(w, lane=line_lane, position=(float(point[0]), float(point[1])))
