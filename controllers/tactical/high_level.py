@@ -142,7 +142,7 @@ class MCTSPlanner:
 
     def _prefer_racing_line(self, plan: Plan, lane: int, count: int) -> Plan:
         """``plan`` with every non-tactical ego waypoint moved to the racing line's lane where that is legal,
-        at top speed (the tracker then drives the line's speed profile)."""
+        and every waypoint with no kart ahead at top speed (the tracker then drives the line's speed profile)."""
         assert self._context is not None
         track = self._context.track
         limit = self._context.lane_change_limit
@@ -154,8 +154,12 @@ class MCTSPlanner:
                 o.checkpoint == w.checkpoint and -INTERACTION_WINDOW < o.time - w.time < BEHIND_WINDOW
                 for o in opponents
             )
-            if not tactical:
-                # the racing line's speed profile (the tracker's) binds, not the game's coarse speed bins
+            behind = any(
+                o.checkpoint == w.checkpoint and -INTERACTION_WINDOW < o.time - w.time <= 0.0 for o in opponents
+            )
+            if not behind:
+                # nobody ahead to keep a distance from: the racing line's speed profile (the tracker's) binds,
+                # not the game's coarse speed bins
                 waypoints[i] = w = replace(w, speed=self._context.kart.top_speed)
             if line_lane != w.lane and not tactical:
                 point = track.lane_point(w.checkpoint, line_lane)
