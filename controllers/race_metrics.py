@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 from controllers.base import Controller
 from controllers.hierarchical import HierarchicalController
-from sim_core.observation import observe
+from sim_core.observation import KartView, observe
 from sim_core.params import DT
 from sim_core.world import World
 
@@ -71,11 +71,11 @@ class RaceMetrics:
                                 self.predictions.append((k, other, w.checkpoint, w.lane))
         self._count_passes(views, step)
 
-    def _count_passes(self, views: Sequence[object], step: int) -> None:
+    def _count_passes(self, views: Sequence[KartView], step: int) -> None:
         hold = round(PASS_HOLD / DT)
         for a in range(self.n_karts):
             for b in range(a + 1, self.n_karts):
-                if getattr(views[a], "finished") or getattr(views[b], "finished"):
+                if views[a].finished or views[b].finished:
                     continue
                 order = 1 if self._distance[a] > self._distance[b] else -1
                 pair = (a, b)

@@ -51,13 +51,13 @@ def main(
         metrics = RaceMetrics(len(names))
         outcome = run_race(RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes), on_step=metrics)
         result = outcome.result
-        for predictor, kart, checkpoint, lane in metrics.predictions:
-            actual = metrics.crossings.get((kart, checkpoint))
+        for predictor, predicted, checkpoint, lane in metrics.predictions:
+            actual = metrics.crossings.get((predicted, checkpoint))
             if actual is not None:
                 judged[predictor] += 1
                 right[predictor] += int(actual == lane)
-        for k, fewest in metrics.shortest_plan.items():
-            shortest[k] = min(shortest[k], fewest)
+        for planner, fewest in metrics.shortest_plan.items():
+            shortest[planner] = min(shortest[planner], fewest)
         if result.winner is not None:
             wins[result.winner] += 1
         for k, kart in enumerate(result.karts):
@@ -82,7 +82,7 @@ def main(
             for k, kart in enumerate(result.karts)
         ]
         print(f"race {i:3d} seed {seed} lanes {lanes} winner {result.winner} | " + " | ".join(figures), flush=True)
-    summary = {
+    summary: dict[str, object] = {
         "track": track,
         "races": races,
         "wins": dict(zip(names, wins, strict=True)),
@@ -90,11 +90,14 @@ def main(
     }
     for k, name in enumerate(names):
         stats = per_kart[k]
-        summary[name] = {key: round(statistics.fmean(values), 3) if values else None for key, values in stats.items()}
+        totals: dict[str, float | int | None] = {
+            key: round(statistics.fmean(values), 3) if values else None for key, values in stats.items()
+        }
         if judged[k]:
-            summary[name]["prediction_accuracy"] = round(right[k] / judged[k], 3)
-            summary[name]["predictions_judged"] = judged[k]
-            summary[name]["fewest_plan_waypoints"] = shortest[k]
+            totals["prediction_accuracy"] = round(right[k] / judged[k], 3)
+            totals["predictions_judged"] = judged[k]
+            totals["fewest_plan_waypoints"] = shortest[k]
+        summary[name] = totals
     print(json.dumps(summary))
 
 

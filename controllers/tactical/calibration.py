@@ -65,6 +65,7 @@ def shifted_line_times(track: Track, line: RacingLine, kart: KartParams) -> tupl
     _SHIFT_TIMES[key] = (shifts, times)
     return shifts, times
 
+
 SHIFT_STEP = 0.25  # [m] grid of the sideways shifts of the line that are timed
 WALL_CLEARANCE = 1.0  # [m] a shifted path keeps this far inside the walls (the racing line's own margin)
 # the tracker drives an off-line lane as kinked blends between lane points, not as a smooth shifted line: the

@@ -224,4 +224,6 @@ class TacticalPlanner:
             lane = last.lane if last else root_lane
             point = self.track.lane_point(checkpoint, lane)
             time_s = (last.time if last else 0.0) + 1.0
-            waypoints.append(Waypoint(checkpoint, lane, (float(point[0]), float(point[1])), float(tb.bin_high[0]), time_s))
+            waypoints.append(
+                Waypoint(checkpoint, lane, (float(point[0]), float(point[1])), float(tb.bin_high[0]), time_s)
+            )

@@ -211,14 +211,28 @@ def allowed_lane(tb: GameTables, state: np.ndarray, p: int) -> int:
 def legal_moves(tb: GameTables, state: np.ndarray, p: int, out: np.ndarray) -> int:
     """Write the legal actions (lane * bins + bin) of player ``p`` into ``out``; return how many.
 
-    A modelled player's moves are those into its predicted lane (:func:`allowed_lane`)."""
+    A modelled player has one move: the earliest arrival in its predicted lane (:func:`allowed_lane`)."""
     bins = tb.bin_low.shape[0]
     lanes = tb.distance.shape[1]
     only = allowed_lane(tb, state, p)
+    if state[p, MODELLED] != 0:
+        # the model's line follower drives as fast as it legally can in its lane: one move
+        best, best_arrival = -1, 1 << 60
+        for lane in range(lanes):
+            if only >= 0 and lane != only:
+                continue
+            for vbin in range(bins - 1, -1, -1):
+                arrival, _, ok = move_outcome(tb, state, p, lane, vbin)
+                if ok:
+                    if arrival < best_arrival:
+                        best, best_arrival = lane * bins + vbin, arrival
+                    break
+        if best < 0:
+            return 0
+        out[0] = best
+        return 1
     k = 0
     for lane in range(lanes):
-        if only >= 0 and lane != only:
-            continue
         for vbin in range(bins):
             _, _, ok = move_outcome(tb, state, p, lane, vbin)
             if ok:
