@@ -90,11 +90,14 @@ def _too_close(
     a collision when under ``window`` [m] with the lateral distance under the clearance.
     """
     speed = tb.distance[c, 0, 0] / max((t1 - t0) / 100.0, 1e-3)
-    for k in range(COLLISION_SAMPLES):
+    start = abs(t0 - u0) / 100.0 * speed
+    start_close = abs(l0 - m0) < tb.lateral_clearance and start < window
+    for k in range(1, COLLISION_SAMPLES):
         f = k / (COLLISION_SAMPLES - 1)
-        gap = abs((t0 + f * (t1 - t0)) - (u0 + f * (u1 - u0))) / 100.0
+        gap = abs((t0 + f * (t1 - t0)) - (u0 + f * (u1 - u0))) / 100.0 * speed
         lateral = abs((l0 + f * (l1 - l0)) - (m0 + f * (m1 - m0)))
-        if lateral < tb.lateral_clearance and gap * speed < window:
+        # the section's start is given, not chosen: from a start already too close, only closing in further counts
+        if lateral < tb.lateral_clearance and gap < window and (not start_close or gap < start):
             return True
     return False
 
