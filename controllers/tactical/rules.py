@@ -81,7 +81,6 @@ def _too_close(
     m0: float,
     m1: float,
     window: float,
-    strict: bool,
 ) -> bool:
     """Whether two karts come within the collision window anywhere along section ``c``.
 
@@ -91,15 +90,11 @@ def _too_close(
     a collision when under ``window`` [m] with the lateral distance under the clearance.
     """
     speed = tb.distance[c, 0, 0] / max((t1 - t0) / 100.0, 1e-3)
-    start = abs(t0 - u0) / 100.0 * speed
-    # a searching player's section that starts too close only rules out closing in further (it must be able
-    # to drop back); a modelled one stays strict (stuck, it ends the game neutrally: see mcts._stuck_values)
-    start_close = not strict and abs(l0 - m0) < tb.lateral_clearance and start < window
-    for k in range(1, COLLISION_SAMPLES):
+    for k in range(COLLISION_SAMPLES):
         f = k / (COLLISION_SAMPLES - 1)
-        gap = abs((t0 + f * (t1 - t0)) - (u0 + f * (u1 - u0))) / 100.0 * speed
+        gap = abs((t0 + f * (t1 - t0)) - (u0 + f * (u1 - u0))) / 100.0
         lateral = abs((l0 + f * (l1 - l0)) - (m0 + f * (m1 - m0)))
-        if lateral < tb.lateral_clearance and gap < window and (not start_close or gap < start):
+        if lateral < tb.lateral_clearance and gap * speed < window:
             return True
     return False
 
@@ -133,7 +128,7 @@ def _collides(tb: GameTables, state: np.ndarray, p: int, lane: int, arrival: int
             window = tb.alongside_distance
         else:
             continue
-        if _too_close(tb, c, t0, float(arrival), l0, l1, u0, u1, m0, m1, window, state[p, MODELLED] != 0):
+        if _too_close(tb, c, t0, float(arrival), l0, l1, u0, u1, m0, m1, window):
             return True
     return False
 
