@@ -1,4 +1,5 @@
-"""MCTS tactical planner speed on the real game: 2 players, horizon 8, on `oval` and `complex`.
+"""MCTS tactical planner speed on the real game: 2 players, horizon 8, on `oval` and `complex`, as raced by
+``mcts-lqng`` (segment times calibrated on the racing line, the other kart a modelled line follower).
 
 Prints iterations/s of a 20,000-iteration search and the wall time of a 2,000-iteration plan (the full
 planner call: root construction, search, waypoint extraction). The last line is one JSON object with
@@ -12,6 +13,7 @@ import json
 import statistics
 import time
 
+from controllers.racing_line import optimise_racing_line
 from controllers.tactical.planner import PlayerState, TacticalPlanner
 from sim_core.params import PAPER_KART
 from sim_core.track_io import get_track
@@ -20,7 +22,9 @@ from sim_core.track_io import get_track
 def players(checkpoint: int) -> list[PlayerState]:
     return [
         PlayerState(kart=0, checkpoint=checkpoint, lane=2, speed=11.0, time=20.0, wear=0.3, lane_changes=0),
-        PlayerState(kart=1, checkpoint=checkpoint, lane=3, speed=12.0, time=20.15, wear=0.3, lane_changes=1),
+        PlayerState(
+            kart=1, checkpoint=checkpoint, lane=3, speed=12.0, time=20.15, wear=0.3, lane_changes=1, modelled=True
+        ),
     ]
 
 
@@ -29,13 +33,14 @@ def main() -> None:
     plan_ms: dict[str, float] = {}
     for name in ("oval", "complex"):
         track = get_track(name)
-        big = TacticalPlanner(track, PAPER_KART, iterations=20_000, seed=1)
+        line = optimise_racing_line(track, PAPER_KART)
+        big = TacticalPlanner(track, PAPER_KART, iterations=20_000, seed=1, line=line)
         big.plan(players(2), 0)  # compile
         big.reset()
         t0 = time.perf_counter()
         plan = big.plan(players(2), 0)
         rates[name] = plan.iterations / (time.perf_counter() - t0)
-        small = TacticalPlanner(track, PAPER_KART, iterations=2_000, seed=1)
+        small = TacticalPlanner(track, PAPER_KART, iterations=2_000, seed=1, line=line)
         times = []
         for i in range(5):
             small.reset()

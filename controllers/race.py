@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,8 +47,14 @@ def load_any_track(name: str):  # type: ignore[no-untyped-def]
     return get_track(name)
 
 
-def run_race(spec: RaceSpec, *, record: bool = False) -> RaceOutcome:
-    """Race ``spec`` to the end (everyone finished or the time limit) and return the result."""
+StepHook = Callable[[World, Sequence[Controller], int], None]
+
+
+def run_race(spec: RaceSpec, *, record: bool = False, on_step: StepHook | None = None) -> RaceOutcome:
+    """Race ``spec`` to the end (everyone finished or the time limit) and return the result.
+
+    ``on_step(world, drivers, step)`` is called after every simulation step (measurements, e.g.
+    :class:`controllers.race_metrics.RaceMetrics`)."""
     track = load_any_track(spec.track)
     params = SimParams(kart=kart_preset(spec.kart_preset))
     n = len(spec.controllers)
@@ -79,6 +86,8 @@ def run_race(spec: RaceSpec, *, record: bool = False) -> RaceOutcome:
                         if recorder is not None:
                             recorder.plan(step, k, driver.active_plan)
         world.step(actions)
+        if on_step is not None:
+            on_step(world, drivers, step)
         if recorder is not None:
             recorder.record(world, actions[0])
         step += 1

@@ -12,6 +12,7 @@ import statistics
 import typer
 
 from controllers.race import RaceSpec, run_race
+from controllers.race_metrics import RaceMetrics
 
 app = typer.Typer(add_completion=False)
 
@@ -43,11 +44,20 @@ def main(
         }
         for _ in names
     ]
+    right, judged, shortest = [0] * len(names), [0] * len(names), [99] * len(names)
     for i in range(races):
         seed = first_seed + i
         lanes = (2, 3) if i % 2 == 0 else (3, 2)
-        outcome = run_race(RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes))
+        metrics = RaceMetrics(len(names))
+        outcome = run_race(RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes), on_step=metrics)
         result = outcome.result
+        for predictor, predicted, checkpoint, lane in metrics.predictions:
+            actual = metrics.crossings.get((predicted, checkpoint))
+            if actual is not None:
+                judged[predictor] += 1
+                right[predictor] += int(actual == lane)
+        for planner, fewest in metrics.shortest_plan.items():
+            shortest[planner] = min(shortest[planner], fewest)
         if result.winner is not None:
             wins[result.winner] += 1
         for k, kart in enumerate(result.karts):
@@ -67,11 +77,12 @@ def main(
                 stats["time"].append(kart.finish_time)
         figures = [
             f"{names[k]} {kart.finish_time or float('nan'):.2f}s "
-            f"f{kart.collisions_at_fault} i{kart.illegal_lane_changes_per_step}/{kart.illegal_lane_changes_checkpoint}"
+            f"f{kart.collisions_at_fault} i{kart.illegal_lane_changes_per_step}/{kart.illegal_lane_changes_checkpoint} "
+            f"p{kart.passes}"
             for k, kart in enumerate(result.karts)
         ]
         print(f"race {i:3d} seed {seed} lanes {lanes} winner {result.winner} | " + " | ".join(figures), flush=True)
-    summary = {
+    summary: dict[str, object] = {
         "track": track,
         "races": races,
         "wins": dict(zip(names, wins, strict=True)),
@@ -79,7 +90,14 @@ def main(
     }
     for k, name in enumerate(names):
         stats = per_kart[k]
-        summary[name] = {key: round(statistics.fmean(values), 3) if values else None for key, values in stats.items()}
+        totals: dict[str, float | int | None] = {
+            key: round(statistics.fmean(values), 3) if values else None for key, values in stats.items()
+        }
+        if judged[k]:
+            totals["prediction_accuracy"] = round(right[k] / judged[k], 3)
+            totals["predictions_judged"] = judged[k]
+            totals["fewest_plan_waypoints"] = shortest[k]
+        summary[name] = totals
     print(json.dumps(summary))
 
 

@@ -70,12 +70,28 @@ class LQNGParams:
     # [m] the same with another kart within avoid_radius: planned lanes are then driven as planned, or two karts
     # planned into neighbouring lanes would both close onto the line and touch
     traffic_lane_tolerance: float = 0.0
+    # [m] with another kart closer than this along the track (alongside), planned lanes are driven exactly
+    # (tolerance 0) whatever ``traffic_lane_tolerance`` says: two karts blending onto one line would touch
+    alongside_distance: float = 0.0
+    # [1/s] the steering input changes at most this fast (lock to lock in 2/rate s); 0: unlimited. A full-lock
+    # zig-zag between planned lanes is what traction control turns into braking
+    steer_rate: float = 0.0
+    # keeping station behind a kart ahead (centres within ``follow_band`` laterally): at most its speed plus
+    # ``follow_gain`` times the gap beyond ``follow_distance`` + ``follow_time`` * speed; 0 gain: off
+    follow_gain: float = 0.0  # [1/s]
+    follow_distance: float = 3.0  # [m] centre to centre (a kart length and a margin)
+    follow_time: float = 0.25  # [s]
+    follow_band: float = 1.6  # [m]
+    follow_brake_gain: float = 3.0  # [1/s] deceleration per m/s above the station-keeping speed
+    # [m] a kart less than this ahead is alongside, not ahead (the referee's alongside rule): lane discipline,
+    # not braking, keeps the two apart
+    follow_min_ahead: float = 1.0
     weights: LQNGWeights = LQNGWeights()
 
 
 # ``mcts-lqng``: the game's speed bins are coarse, so planned speeds are a ceiling 3 m/s above the bin and the
 # racing line's speed profile binds
-MCTS_TRACKING = LQNGParams(speed_margin=3.0)
+MCTS_TRACKING = LQNGParams(speed_margin=3.0, traffic_lane_tolerance=1.25, alongside_distance=4.0, follow_gain=1.0)
 # ``fixed-lqng``: the original's heading weight and avoidance scale with the fixed line (1.9, 0.45), a stronger
 # denial, and the line's own lanes followed to within ``lane_tolerance`` in traffic as well
 FIXED_LINE_TRACKING = LQNGParams(
@@ -91,12 +107,14 @@ class LQNGTracker:
         self._context: RaceContext | None = None
         self._line: RacingLine | None = None
         self._kart_vector = np.zeros(0)
+        self._steer = 0.0
 
     def reset(self, context: RaceContext) -> None:
         """Remember the track and kart limits and get the track's racing line (the shape followed between
         waypoints that agree with it)."""
         self._context = context
         self._kart_vector = context.kart.as_array()
+        self._steer = 0.0
         self._line = optimise_racing_line(context.track, context.kart)
 
     # ------------------------------------------------------------------ targets
@@ -139,6 +157,24 @@ class LQNGTracker:
         point, tangent = track.point_at(aim_s)
         return float(point[0] - tangent[1] * d), float(point[1] + tangent[0] * d)
 
+    def _station_limit(self, kart: KartView, others: list[KartView]) -> float:
+        """Highest speed [m/s] that keeps station behind the nearest kart ahead in ``kart``'s path (inf: none).
+
+        Ahead and aside are measured in the kart's own heading frame (in a hairpin the centre line's progress
+        says little about the distance between two karts)."""
+        p = self.params
+        limit = math.inf
+        cos_h, sin_h = math.cos(kart.heading), math.sin(kart.heading)
+        for other in others:
+            dx, dy = other.x - kart.x, other.y - kart.y
+            ahead = dx * cos_h + dy * sin_h
+            aside = -dx * sin_h + dy * cos_h
+            if ahead <= p.follow_min_ahead or abs(aside) >= p.follow_band:
+                continue
+            gap = ahead - (p.follow_distance + p.follow_time * kart.speed)
+            limit = min(limit, max(other.speed + p.follow_gain * gap, 0.0))
+        return limit
+
     def _speed_target(self, kart: KartView, first: Waypoint, second: Waypoint, top: float, brake: float) -> float:
         p = self.params
         assert self._line is not None and self._context is not None
@@ -162,9 +198,16 @@ class LQNGTracker:
         others = [k for k in observation.others() if math.hypot(k.x - me.x, k.y - me.y) < w.avoid_radius]
         players = [me, *others]
         tolerance = self.params.traffic_lane_tolerance if others else self.params.lane_tolerance
+        length = track.length
+        if any(
+            abs((k.progress - me.progress + 0.5 * length) % length - 0.5 * length) < self.params.alongside_distance
+            for k in others
+        ):
+            tolerance = 0.0
         A, B = linearised_dynamics(players, DT)
         x0 = np.zeros(STATE_SIZE * len(players))
         targets = []
+        station = self._station_limit(me, others) if self.params.follow_gain > 0.0 else math.inf
         for i, k in enumerate(players):
             # positions relative to the ego kart keep the numbers small
             x0[STATE_SIZE * i : STATE_SIZE * i + 3] = (k.x - me.x, k.y - me.y, k.speed)
@@ -172,15 +215,24 @@ class LQNGTracker:
             ax, ay = self._aim(track, k, first, second, tolerance)
             heading_error = math.remainder(math.atan2(ay - k.y, ax - k.x) - k.heading, 2.0 * math.pi)
             speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
+            if i == 0:
+                speed = min(speed, station)
             targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))
         Q, q = self._costs(players, targets, plan)
         R = [w.control * np.eye(2) for _ in players]
         P, alpha = feedback_nash(A, B, Q, q, R, self.params.horizon)
         accel, yaw_rate = -(P[0][0:2] @ x0) - alpha[0][0:2]
+        if me.speed > station:
+            # closing on the kart ahead: brake at once (the LQ speed weight is too soft for it)
+            accel = min(float(accel), -self.params.follow_brake_gain * (me.speed - station))
         throttle = throttle_for_acceleration(self._kart_vector, me.speed, float(accel))
         speed = max(abs(me.speed), 1.0)
-        steer = math.atan(yaw_rate * kart.wheelbase / speed) / kart.max_steer_angle
-        return Action(float(np.clip(steer, -1.0, 1.0)), float(np.clip(throttle, -1.0, 1.0)))
+        steer = float(np.clip(math.atan(yaw_rate * kart.wheelbase / speed) / kart.max_steer_angle, -1.0, 1.0))
+        if self.params.steer_rate > 0.0:
+            step = self.params.steer_rate * DT
+            steer = min(max(steer, self._steer - step), self._steer + step)
+        self._steer = steer
+        return Action(steer, float(np.clip(throttle, -1.0, 1.0)))
 
     def _costs(
         self, players: list[KartView], targets: list[tuple[float, float, float, float]], plan: Plan | None

@@ -30,6 +30,13 @@ class GameParams:
     min_speed: float = 6.0  # [m/s] lowest bin starts here
     horizon: int = 8  # checkpoints ahead
     collision_window: float = 0.1  # [s] same lane at the same checkpoint closer than this is ruled out
+    # [m] two karts' centres closer than this along the track, and laterally closer than ``lateral_clearance``,
+    # anywhere along a section (sampled) is a collision: a kart length (2 m) plus a margin; 0 disables it
+    collision_distance: float = 3.0
+    lateral_clearance: float = 1.5  # [m] a kart width (0.9 m) plus a margin
+    # [m] a kart still to move (behind in time) constrains the one moving first only when this close along the
+    # track (alongside, overlapping): the leader need not yield to a follower, who must keep its distance
+    alongside_distance: float = 2.0
     collision_pruning: bool = True  # the paper's rule (the original had it switched off)
     value_scale: float = 1.0  # [s] time advantage that maps to a value of 1 (0.5 = level)
     section_window: int = 2  # opponents fewer than this many checkpoints away are players in the game
@@ -61,6 +68,12 @@ class GameTables(NamedTuple):
     kart: np.ndarray  # the kart's packed parameters: its own grip and tyre-wear model (sim_core.kart)
     collision_window: int  # [0.01 s]; 0 disables collision pruning
     value_scale: float  # [0.01 s]
+    penalty: np.ndarray  # (N, lanes, lanes) [0.01 s] time added to a section (off the racing line, lane changes)
+    lane_offset: np.ndarray  # (N, lanes) [m] left-positive lateral offsets of the lanes at each checkpoint
+    predicted_lane: np.ndarray  # (N,) 0-based lane a modelled (line-following) player takes at checkpoint c; -1 none
+    collision_distance: float  # [m] 0 disables the along-the-section check
+    lateral_clearance: float  # [m]
+    alongside_distance: float  # [m]
 
 
 def velocity_bins(params: GameParams, top_speed: float) -> tuple[np.ndarray, np.ndarray]:
@@ -116,4 +129,10 @@ def build_tables(track: Track, kart: KartParams, params: GameParams, lane_limit:
         kart=kart.as_array(),
         collision_window=round(params.collision_window * TIME_UNITS_PER_S) if params.collision_pruning else 0,
         value_scale=params.value_scale * TIME_UNITS_PER_S,
+        penalty=np.zeros((n, lanes, lanes)),
+        lane_offset=np.array([track.lane_offsets(c) for c in range(n)], dtype=float),
+        predicted_lane=np.full(n, -1, dtype=np.int64),
+        collision_distance=float(params.collision_distance) if params.collision_pruning else 0.0,
+        lateral_clearance=float(params.lateral_clearance),
+        alongside_distance=float(params.alongside_distance),
     )

@@ -12,18 +12,22 @@ the paper names its variants (MCTS-* and Fixed-*, registered as ``mcts-*`` and `
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 from controllers.base import RaceContext
 from controllers.plan import Plan, Waypoint
-from controllers.racing_line import optimise_racing_line
+from controllers.racing_line import RacingLine, optimise_racing_line
 from controllers.tactical.game import GameParams
 from controllers.tactical.planner import PlayerState, TacticalPlanner
-from sim_core.observation import Observation
+from sim_core.observation import KartView, Observation
 from sim_core.rules import lane_change_update
 from sim_core.track import Track
 
-INTERACTION_WINDOW = 1.0  # [s] another kart predicted at a checkpoint this close in time makes it tactical
+INTERACTION_WINDOW = 1.0  # [s] another kart predicted at a checkpoint this much earlier makes it tactical
+# [s] ... or this much later: a kart behind by more than about a kart length cannot be blocked without losing
+# time (it must keep its distance, the follower's duty), so a leader defends by driving the racing line
+BEHIND_WINDOW = 0.15
 
 
 def _lanes_legal(track: Track, lane: int, count: int, waypoints: list[Waypoint], limit: int) -> bool:
@@ -60,12 +64,15 @@ class MCTSPlanner:
         self._planner: TacticalPlanner | None = None
         self._context: RaceContext | None = None
         self._line_lanes: tuple[int, ...] = ()
+        self._line: RacingLine | None = None
+        self._committed: dict[int, int] = {}
 
     def reset(self, context: RaceContext) -> None:
         """Build the game tables for this track and kart (and the racing line's lanes)."""
         self._context = context
-        if self.racing_line:
-            self._line_lanes = optimise_racing_line(context.track, context.kart).checkpoint_lanes
+        self._line = optimise_racing_line(context.track, context.kart)
+        self._line_lanes = self._line.checkpoint_lanes
+        self._committed = {}
         self._planner = TacticalPlanner(
             context.track,
             context.kart,
@@ -73,41 +80,87 @@ class MCTSPlanner:
             iterations=self.iterations,
             seed=context.seed,
             lane_limit=context.lane_change_limit,
+            line=self._line,
+        )
+
+    def present_state(self, kart: KartView, now: float, ego: int) -> PlayerState:
+        """A kart's predicted crossing of its next checkpoint, from its present progress and speed (a standing
+        start included): the time from constant acceleration (or braking) toward the racing line's speed there;
+        the lane: the ego's committed lane there, else the lane nearest its present lateral offset."""
+        assert self._context is not None and self._line is not None and self._planner is not None
+        track = self._context.track
+        tb = self._planner.tables
+        checkpoint = max(kart.checkpoints_passed, 0) + 1
+        s_next = float(track.checkpoint_s[checkpoint % track.n_checkpoints])
+        distance = max((s_next - kart.progress) % track.length, 0.05)
+        v0 = max(kart.speed, 0.0)
+        v_line = float(self._line.speed_at(s_next))
+        if v0 <= v_line:
+            v1 = min(v_line, math.sqrt(v0 * v0 + 2.0 * tb.accel * distance))
+        else:
+            v1 = max(v_line, math.sqrt(max(v0 * v0 - 2.0 * tb.brake * distance, 0.0)))
+        lane = track.lane_id(checkpoint, kart.lateral)
+        if kart.index == ego:
+            lane = self._committed.get(checkpoint, lane)
+        count, _ = lane_change_update(
+            kart.lane_changes,
+            kart.lane,
+            lane,
+            track.section_is_straight(checkpoint - 1),
+            track.section_is_straight(checkpoint),
+            self._context.lane_change_limit,
+        )
+        return PlayerState(
+            kart=kart.index,
+            checkpoint=checkpoint,
+            lane=lane,
+            speed=v1,
+            time=now + 2.0 * distance / max(v0 + v1, 0.5),
+            wear=kart.wear,
+            lane_changes=count,
+            modelled=kart.index != ego,
         )
 
     def plan(self, observation: Observation) -> Plan:
-        """Search from the karts' states at their last checkpoint crossings."""
+        """Search from every kart's predicted crossing of its next checkpoint (:meth:`present_state`)."""
         assert self._planner is not None, "reset() first"
         players = [
-            PlayerState(
-                kart=k.index,
-                checkpoint=max(k.checkpoints_passed, 0),
-                lane=k.lane,
-                speed=k.crossing_speed,
-                time=k.crossing_time,
-                wear=k.crossing_wear,
-                lane_changes=k.lane_changes,
-            )
+            self.present_state(k, observation.time, observation.ego)
             for k in observation.karts
             if not k.finished or k.index == observation.ego
         ]
-        plan = self._planner.plan(players, observation.ego)
-        return self._prefer_racing_line(plan, observation) if self.racing_line else plan
+        plan = self._planner.plan(players, observation.ego, self._committed)
+        me = next(p for p in players if p.kart == observation.ego)
+        if self.racing_line:
+            plan = self._prefer_racing_line(plan, me.lane, me.lane_changes)
+        # the root's own crossing (the lane the kart is committed to at its next checkpoint) leads the plan
+        point = self._context.track.lane_point(me.checkpoint, me.lane) if self._context else (0.0, 0.0)
+        first = Waypoint(me.checkpoint, me.lane, (float(point[0]), float(point[1])), me.speed, 0.0)
+        plan = replace(plan, waypoints={**plan.waypoints, plan.ego: (first, *plan.ego_waypoints)})
+        self._committed = {w.checkpoint: w.lane for w in plan.ego_waypoints}
+        return plan
 
-    def _prefer_racing_line(self, plan: Plan, observation: Observation) -> Plan:
-        """``plan`` with every non-tactical ego waypoint moved to the racing line's lane where that is legal."""
+    def _prefer_racing_line(self, plan: Plan, lane: int, count: int) -> Plan:
+        """``plan`` with every non-tactical ego waypoint moved to the racing line's lane where that is legal,
+        and every waypoint with no kart ahead at top speed (the tracker then drives the line's speed profile)."""
         assert self._context is not None
         track = self._context.track
         limit = self._context.lane_change_limit
         opponents = [w for ws in plan.opponent_waypoints().values() for w in ws]
-        me = observation.me
         waypoints = list(plan.ego_waypoints)
-        lane, count = me.lane, me.lane_changes
         for i, w in enumerate(waypoints):
             line_lane = self._line_lanes[w.checkpoint % track.n_checkpoints]
             tactical = any(
-                o.checkpoint == w.checkpoint and abs(o.time - w.time) < INTERACTION_WINDOW for o in opponents
+                o.checkpoint == w.checkpoint and -INTERACTION_WINDOW < o.time - w.time < BEHIND_WINDOW
+                for o in opponents
             )
+            behind = any(
+                o.checkpoint == w.checkpoint and -INTERACTION_WINDOW < o.time - w.time <= 0.0 for o in opponents
+            )
+            if not behind:
+                # nobody ahead to keep a distance from: the racing line's speed profile (the tracker's) binds,
+                # not the game's coarse speed bins
+                waypoints[i] = w = replace(w, speed=self._context.kart.top_speed)
             if line_lane != w.lane and not tactical:
                 point = track.lane_point(w.checkpoint, line_lane)
                 snapped = replace(w, lane=line_lane, position=(float(point[0]), float(point[1])))

@@ -34,7 +34,10 @@ def _round_of(state: np.ndarray, start_round: int, final_round: int) -> int:
 def _fastest_move(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins: int) -> int:
     """The legal move with the earliest arrival (then the smaller lane change), or -1 if none."""
     action, best_key = -1, 1 << 60
+    only = rules.allowed_lane(tb, state, p)
     for lane in range(n_lanes):
+        if only >= 0 and lane != only:
+            continue
         # a higher arrival speed never arrives later, so the first legal bin from the top is this lane's fastest
         for vbin in range(bins - 1, -1, -1):
             arrival, _, ok = rules.move_outcome(tb, state, p, lane, vbin)
@@ -44,6 +47,17 @@ def _fastest_move(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins:
                     action, best_key = lane * bins + vbin, key
                 break
     return action
+
+
+@njit(cache=True)
+def _stuck_values(state: np.ndarray, p: int, values: np.ndarray) -> None:
+    """Values when player ``p`` has no legal move: it loses (0) and the others win (1), unless it is a modelled
+    player. Then nobody gains (0.5 each): the model's line follower would brake or swerve rather than stop,
+    and shutting it in must not look like a win (it made the search block and slow down)."""
+    for q in range(state.shape[0]):
+        values[q] = 0.5 if state[p, rules.MODELLED] != 0 else 1.0
+    if state[p, rules.MODELLED] == 0:
+        values[p] = 0.0
 
 
 @njit(cache=True)
@@ -60,7 +74,8 @@ def _rollout(
     """Play the game to the horizon from ``state`` (modified in place) and write every player's value.
 
     The mover takes its fastest legal move (earliest arrival, then the smaller lane change) with probability
-    ``greedy``, otherwise a uniformly random legal one. A player with no legal move loses (0), the others win (1).
+    ``greedy``, otherwise a uniformly random legal one; a modelled player always takes its fastest move into
+    its predicted lane. A player with no legal move ends the game (:func:`_stuck_values`).
     """
     bins = tb.bin_low.shape[0]
     n_lanes = tb.distance.shape[1]
@@ -72,7 +87,8 @@ def _rollout(
             r += 1
             continue
         action = -1
-        if np.random.random() < greedy:
+        # a modelled player follows its model: the fastest move into its predicted lane
+        if state[p, rules.MODELLED] != 0 or np.random.random() < greedy:
             action = _fastest_move(tb, state, p, n_lanes, bins)
         else:
             # rejection sampling is uniform over the legal moves and usually needs one or two draws
@@ -87,9 +103,7 @@ def _rollout(
                 if count > 0:
                     action = moves[np.random.randint(0, count)]
         if action < 0:
-            for q in range(state.shape[0]):
-                values[q] = 1.0
-            values[p] = 0.0
+            _stuck_values(state, p, values)
             return
         rules.apply_move(tb, state, p, action)
     terminal_values(tb, state, reference, values)
@@ -99,8 +113,8 @@ def _rollout(
 def greedy_line(tb: GameTables, state: np.ndarray, round_cp: int, final_round: int, out: np.ndarray) -> int:
     """Continue ``state`` (in place) to the horizon with every player taking its fastest legal move.
 
-    Writes the moves as rows [player, action] into ``out`` and returns how many were played (it stops early
-    if a player is stuck).
+    Writes the moves as rows [player, action] into ``out`` and returns how many were played. A stuck player
+    other than the ego (row 0) leaves the game (a row [player, -1]); a stuck ego stops the line.
     """
     bins = tb.bin_low.shape[0]
     n_lanes = tb.distance.shape[1]
@@ -113,7 +127,13 @@ def greedy_line(tb: GameTables, state: np.ndarray, round_cp: int, final_round: i
             continue
         action = _fastest_move(tb, state, p, n_lanes, bins)
         if action < 0:
-            return count
+            if p == 0:
+                return count  # the ego (row 0) is stuck
+            state[p, rules.CHECKPOINT] = -1  # another stuck player leaves the game (row [p, -1]); the others go on
+            out[count, 0] = p
+            out[count, 1] = -1
+            count += 1
+            continue
         rules.apply_move(tb, state, p, action)
         out[count, 0] = p
         out[count, 1] = action
@@ -274,9 +294,7 @@ def search(
         # ---- simulation
         if tree_mover[node] != rules.NO_PLAYER and tree_untried_count[node] == 0 and tree_first_child[node] == NO_NODE:
             # the player to move is stuck
-            for q in range(players):
-                values[q] = 1.0
-            values[tree_mover[node]] = 0.0
+            _stuck_values(tree_state[node], tree_mover[node], values)
         else:
             scratch[:, :] = tree_state[node]
             _rollout(tb, scratch, tree_round[node], final_round, greedy, moves, reference, values)

@@ -10,7 +10,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from controllers.plan import Plan, Waypoint
+from controllers.racing_line import RacingLine
 from controllers.tactical import rules
+from controllers.tactical.calibration import calibrate_tables
 from controllers.tactical.game import TIME_UNITS_PER_S, WEAR_UNITS, GameParams, GameTables, build_tables
 from controllers.tactical.mcts import SearchTree, greedy_line
 from sim_core.params import KartParams
@@ -20,19 +22,21 @@ DEFAULT_EXPLORATION = 0.2  # UCT constant (values in [0, 1], value_scale 1 s): b
 DEFAULT_GREEDY = 0.8  # probability that a rollout move is the fastest legal one
 TREE_CAPACITY_PLANS = 8  # a reused tree grows for up to this many plans' budgets before it starts afresh
 PLAN_MIN_VISITS = 30  # a plan follows the search tree only through choices visited at least this often
+COMMIT_MARGIN = 0.02  # value (0.02 = 0.05 s at value_scale 1 s) a new lane must gain to replace a committed one
 
 
 @dataclass(frozen=True)
 class PlayerState:
-    """What the planner needs of one kart, taken at its last checkpoint crossing."""
+    """What the planner needs of one kart: its (last or predicted next) crossing of a checkpoint."""
 
     kart: int  # index of the kart in the race
-    checkpoint: int  # checkpoints passed (absolute, not wrapped)
+    checkpoint: int  # absolute checkpoint index of that crossing (not wrapped)
     lane: int  # 1-based lane at that crossing
     speed: float  # [m/s] speed at that crossing
     time: float  # [s] race time of that crossing
     wear: float  # [-] tyre wear at that crossing
     lane_changes: int  # the referee's eq. (10) gen_lane_var counter
+    modelled: bool = False  # the player follows the opponent model (the racing line's lanes) instead of searching
 
 
 class TacticalPlanner:
@@ -53,10 +57,13 @@ class TacticalPlanner:
         exploration: float = DEFAULT_EXPLORATION,
         greedy: float = DEFAULT_GREEDY,
         lane_limit: int | None = None,
+        line: RacingLine | None = None,
     ) -> None:
         self.track = track
         self.params = params or GameParams()
         self.tables: GameTables = build_tables(track, kart, self.params, lane_limit)
+        if line is not None:
+            self.tables = calibrate_tables(self.tables, track, line, kart)
         self.iterations = iterations
         self.seed = seed
         self.exploration = exploration
@@ -102,17 +109,22 @@ class TacticalPlanner:
             state[row, rules.CHECKPOINT] = leader_cp
             state[row, rules.LANE] = p.lane - 1
             state[row, rules.PREV_LANE] = p.lane - 1
+            state[row, rules.MODELLED] = int(p.modelled and p.kart != ego)
             state[row, rules.BIN] = self.speed_bin(p.speed)
             state[row, rules.WEAR] = round(min(max(p.wear, 0.0), 1.0) * WEAR_UNITS)
             state[row, rules.LANE_COUNT] = p.lane_changes
         earliest = min(times)
         for row, t in enumerate(times):
             state[row, rules.TIME] = round((t - earliest) * TIME_UNITS_PER_S)
+            state[row, rules.PREV_TIME] = state[row, rules.TIME]
         return state, [p.kart for p in chosen]
 
     # ------------------------------------------------------------------ search
-    def plan(self, players: Sequence[PlayerState], ego: int) -> Plan:
-        """Search from the current states and return the ego plan and the predicted responses."""
+    def plan(self, players: Sequence[PlayerState], ego: int, committed: dict[int, int] | None = None) -> Plan:
+        """Search from the current states and return the ego plan and the predicted responses.
+
+        ``committed`` maps checkpoints to the ego's lanes of the previous plan: the new plan keeps such a lane
+        unless its own choice is better by ``COMMIT_MARGIN`` (no churn between near-equal choices)."""
         root, karts = self.root_state(players, ego)
         horizon = self.params.horizon
         tb = self.tables
@@ -132,15 +144,48 @@ class TacticalPlanner:
         tree.run(tb, root, horizon, budget, seed, self.exploration, self.greedy, resume=reuse)
         seconds = time.perf_counter() - t0
         self._tree_root = root.copy()
-        return self._extract(tree, karts, ego, int(root[0, rules.CHECKPOINT]), budget, seconds)
+        return self._extract(tree, karts, ego, int(root[0, rules.CHECKPOINT]), budget, seconds, committed or {})
+
+    def _principal_variation(self, tree: SearchTree, committed: dict[int, int]) -> list[int]:
+        """The most visited line through the tree, keeping the ego's committed lanes unless a choice beats
+        them by ``COMMIT_MARGIN`` (both choices visited at least ``PLAN_MIN_VISITS`` times)."""
+        bins = len(self.tables.bin_low)
+        path = [0]
+        while True:
+            kids = tree.children(path[-1])
+            if not kids:
+                return path
+            best = max(kids, key=tree._rank)
+            if len(path) > 1 and int(tree.visits[best]) < PLAN_MIN_VISITS:
+                return path
+            if int(tree.mover[path[-1]]) == 0:
+                want = committed.get(int(tree.state[best][0, rules.CHECKPOINT]))
+                if want is not None and int(tree.action[best]) // bins != want - 1:
+                    keep = [
+                        k
+                        for k in kids
+                        if int(tree.action[k]) // bins == want - 1 and int(tree.visits[k]) >= PLAN_MIN_VISITS
+                    ]
+                    if keep:
+                        alt = max(keep, key=tree._rank)
+                        if tree._rank(alt)[1] >= tree._rank(best)[1] - COMMIT_MARGIN:
+                            best = alt
+            path.append(best)
 
     def _extract(
-        self, tree: SearchTree, karts: list[int], ego: int, root_cp: int, iterations: int, seconds: float
+        self,
+        tree: SearchTree,
+        karts: list[int],
+        ego: int,
+        root_cp: int,
+        iterations: int,
+        seconds: float,
+        committed: dict[int, int],
     ) -> Plan:
         tb = self.tables
         bins = len(tb.bin_low)
         per_player: dict[int, list[Waypoint]] = {k: [] for k in karts}
-        path = tree.principal_variation(PLAN_MIN_VISITS)
+        path = self._principal_variation(tree, committed)
         moves = [(int(tree.mover[tree.parent[node]]), int(tree.action[node]), tree.state[node]) for node in path[1:]]
         # beyond the searched tree the plan continues with everyone's fastest legal moves
         state = tree.state[path[-1]].copy()
@@ -148,6 +193,9 @@ class TacticalPlanner:
         played = greedy_line(tb, state, int(tree.round[path[-1]]), root_cp + self.params.horizon, tail)
         replay = tree.state[path[-1]].copy()
         for mover, action in tail[:played]:
+            if action < 0:
+                replay[mover, rules.CHECKPOINT] = -1  # stuck: left the game
+                continue
             rules.apply_move(tb, replay, int(mover), int(action))
             moves.append((int(mover), int(action), replay.copy()))
         for mover, action, states in moves:
@@ -164,4 +212,18 @@ class TacticalPlanner:
                     time=float(state[rules.TIME]) / TIME_UNITS_PER_S,
                 )
             )
+        self._pad(per_player[ego], root_cp, int(tree.state[0][0, rules.LANE]) + 1)
         return Plan(ego, root_cp, {k: tuple(w) for k, w in per_player.items()}, iterations, tree.size, seconds)
+
+    def _pad(self, waypoints: list[Waypoint], root_cp: int, root_lane: int) -> None:
+        """Fill the ego's plan to the horizon (a stuck ego: hold the lane at the lowest speed bin)."""
+        tb = self.tables
+        while len(waypoints) < self.params.horizon:
+            last = waypoints[-1] if waypoints else None
+            checkpoint = last.checkpoint + 1 if last else root_cp + 1
+            lane = last.lane if last else root_lane
+            point = self.track.lane_point(checkpoint, lane)
+            time_s = (last.time if last else 0.0) + 1.0
+            waypoints.append(
+                Waypoint(checkpoint, lane, (float(point[0]), float(point[1])), float(tb.bin_high[0]), time_s)
+            )

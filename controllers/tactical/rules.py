@@ -27,7 +27,11 @@ TIME = 3  # [0.01 s] time state relative to the root's leader
 WEAR = 4  # [1e-4] tyre wear
 LANE_COUNT = 5  # eq. (10) gen_lane_var: recent lane changes on this contiguous straight or curve
 PREV_LANE = 6  # 0-based lane at the previous checkpoint (to tell when two players' paths cross)
-N_FIELDS = 7
+PREV_TIME = 7  # [0.01 s] time state at the previous checkpoint (to check a collision along the section)
+MODELLED = 8  # 1: the player follows the opponent model (the racing line's lanes), 0: it plays freely
+N_FIELDS = 9
+
+COLLISION_SAMPLES = 5  # points along a section (both ends included) where two karts' positions are compared
 
 NO_PLAYER = -1
 
@@ -62,6 +66,71 @@ def next_player(state: np.ndarray, round_checkpoint: int) -> int:
         if state[p, CHECKPOINT] == round_checkpoint and (best == NO_PLAYER or state[p, TIME] < state[best, TIME]):
             best = p
     return best
+
+
+@njit(cache=True)
+def _too_close(
+    tb: GameTables,
+    c: int,
+    t0: float,
+    t1: float,
+    l0: float,
+    l1: float,
+    u0: float,
+    u1: float,
+    m0: float,
+    m1: float,
+    window: float,
+) -> bool:
+    """Whether two karts come within the collision window anywhere along section ``c``.
+
+    One kart goes from lateral offset ``l0`` at time ``t0`` to ``l1`` at ``t1``, the other from ``m0`` at ``u0``
+    to ``m1`` at ``u1`` (times in 0.01 s). Both are interpolated linearly along the section; at each sampled
+    point the time gap at the same place times the first kart's mean speed is their distance along the track,
+    a collision when under ``window`` [m] with the lateral distance under the clearance.
+    """
+    speed = tb.distance[c, 0, 0] / max((t1 - t0) / 100.0, 1e-3)
+    for k in range(COLLISION_SAMPLES):
+        f = k / (COLLISION_SAMPLES - 1)
+        gap = abs((t0 + f * (t1 - t0)) - (u0 + f * (u1 - u0))) / 100.0
+        lateral = abs((l0 + f * (l1 - l0)) - (m0 + f * (m1 - m0)))
+        if lateral < tb.lateral_clearance and gap * speed < window:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _collides(tb: GameTables, state: np.ndarray, p: int, lane: int, arrival: int) -> bool:
+    """Whether player ``p`` driving to ``lane`` (arriving at ``arrival``) comes too close to another player.
+
+    Against a player who already drove this section (this round): its actual path. Against one still at the
+    checkpoint (behind in time, about to move): that it holds its lane at the same pace, within the shorter
+    alongside window, so that nobody moves across a kart alongside (the referee's alongside rule) while a
+    leader need not yield to a kart behind it.
+    """
+    n = tb.straight.shape[0]
+    c = state[p, CHECKPOINT] % n
+    nxt = (c + 1) % n
+    here = state[p, LANE]
+    t0 = float(state[p, TIME])
+    l0, l1 = tb.lane_offset[c, here], tb.lane_offset[nxt, lane]
+    for q in range(state.shape[0]):
+        if q == p:
+            continue
+        if state[q, CHECKPOINT] == state[p, CHECKPOINT] + 1:
+            u0, u1 = float(state[q, PREV_TIME]), float(state[q, TIME])
+            m0, m1 = tb.lane_offset[c, state[q, PREV_LANE]], tb.lane_offset[nxt, state[q, LANE]]
+            window = tb.collision_distance
+        elif state[q, CHECKPOINT] == state[p, CHECKPOINT]:
+            u0 = float(state[q, TIME])
+            u1 = u0 + (arrival - t0)
+            m0, m1 = tb.lane_offset[c, state[q, LANE]], tb.lane_offset[nxt, state[q, LANE]]
+            window = tb.alongside_distance
+        else:
+            continue
+        if _too_close(tb, c, t0, float(arrival), l0, l1, u0, u1, m0, m1, window):
+            return True
+    return False
 
 
 @njit(cache=True)
@@ -106,7 +175,7 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
     # the next move starts from the bin's middle speed, whatever the arrival was capped to
     if 0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin]) > entry + 1e-9:
         return 0, 0, 0
-    arrival = state[p, TIME] + int(t * 100.0 + 0.5)
+    arrival = state[p, TIME] + int(t * 100.0 + tb.penalty[c, here, lane] + 0.5)
     # eq. (8) gen_coll_avoid as the paper discretises it: no arrival close in time in the same lane or across a path
     if tb.collision_window > 0:
         target = state[p, CHECKPOINT] + 1
@@ -116,14 +185,52 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
             # the same lane, or swapping sides with the other on the way (side by side, the paths cross)
             if state[q, LANE] == lane or (here - state[q, PREV_LANE]) * (lane - state[q, LANE]) < 0:
                 return 0, 0, 0
+    # the same along the section, with a distance window of a kart length plus a margin
+    if tb.collision_distance > 0.0 and _collides(tb, state, p, lane, arrival):
+        return 0, 0, 0
     return arrival, count, 1
 
 
 @njit(cache=True)
+def allowed_lane(tb: GameTables, state: np.ndarray, p: int) -> int:
+    """The only lane a modelled player may take at its next checkpoint (the racing line's lane there), or -1
+    when it plays freely (not modelled, no line, or no legal move in that lane: then it avoids like anyone)."""
+    if state[p, MODELLED] == 0:
+        return -1
+    lane = tb.predicted_lane[(state[p, CHECKPOINT] + 1) % tb.straight.shape[0]]
+    if lane < 0:
+        return -1
+    for vbin in range(tb.bin_low.shape[0]):
+        _, _, ok = move_outcome(tb, state, p, lane, vbin)
+        if ok:
+            return lane
+    return -1
+
+
+@njit(cache=True)
 def legal_moves(tb: GameTables, state: np.ndarray, p: int, out: np.ndarray) -> int:
-    """Write the legal actions (lane * bins + bin) of player ``p`` into ``out``; return how many."""
+    """Write the legal actions (lane * bins + bin) of player ``p`` into ``out``; return how many.
+
+    A modelled player has one move: the earliest arrival in its predicted lane (:func:`allowed_lane`)."""
     bins = tb.bin_low.shape[0]
     lanes = tb.distance.shape[1]
+    only = allowed_lane(tb, state, p)
+    if state[p, MODELLED] != 0:
+        # the model's line follower drives as fast as it legally can in its lane: one move
+        best, best_arrival = -1, 1 << 60
+        for lane in range(lanes):
+            if only >= 0 and lane != only:
+                continue
+            for vbin in range(bins - 1, -1, -1):
+                arrival, _, ok = move_outcome(tb, state, p, lane, vbin)
+                if ok:
+                    if arrival < best_arrival:
+                        best, best_arrival = lane * bins + vbin, arrival
+                    break
+        if best < 0:
+            return 0
+        out[0] = best
+        return 1
     k = 0
     for lane in range(lanes):
         for vbin in range(bins):
@@ -146,6 +253,7 @@ def apply_move(tb: GameTables, state: np.ndarray, p: int, action: int) -> bool:
     state[p, WEAR] = worn_after(tb, state[p, WEAR], tb.turn_angle[c])
     state[p, CHECKPOINT] += 1
     state[p, PREV_LANE] = state[p, LANE]
+    state[p, PREV_TIME] = state[p, TIME]
     state[p, LANE] = lane
     state[p, BIN] = vbin
     state[p, TIME] = arrival

@@ -1,5 +1,5 @@
 """The MCTS planner part keeps the racing line's lanes where no kart interacts, without ever breaking the
-lane-change rule to get there."""
+lane-change rule to get there; from a standing start beside another kart it keeps its lane or moves away."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from hypothesis import strategies as hs
 
 from controllers.base import RaceContext
 from controllers.plan import Plan, Waypoint
-from controllers.tactical.high_level import INTERACTION_WINDOW, MCTSPlanner, _lanes_legal
+from controllers.tactical.high_level import BEHIND_WINDOW, INTERACTION_WINDOW, MCTSPlanner, _lanes_legal
 from sim_core.observation import observe
 from sim_core.params import PAPER_KART, SimParams
 from sim_core.track_io import get_track
@@ -45,7 +45,6 @@ def test_snapping_to_the_line_never_breaks_the_lane_change_rule(
     ego_lanes: list[int], other_lanes: list[int], gap: float, start_lane: int, start_count: int
 ) -> None:
     me = replace(OBSERVATION.me, lane=start_lane, lane_changes=start_count)
-    observation = replace(OBSERVATION, karts=(me, *OBSERVATION.karts[1:]))
     limit = TRACK.lane_change_limit
     first = me.checkpoints_passed + 1
     times = [0.8 * (i + 1) for i in range(8)]
@@ -54,14 +53,34 @@ def test_snapping_to_the_line_never_breaks_the_lane_change_rule(
         return  # the search only ever returns legal plans
     other = _waypoints(other_lanes, first, [t + gap for t in times])
     plan = Plan(0, first - 1, {0: ego, 1: other}, 50, 1, 0.0)
-    snapped = PLANNER._prefer_racing_line(plan, observation)
+    snapped = PLANNER._prefer_racing_line(plan, me.lane, me.lane_changes)
     out = list(snapped.ego_waypoints)
     assert _lanes_legal(TRACK, me.lane, me.lane_changes, out, limit)
     assert snapped.waypoints[1] == other  # predictions untouched
     for before, after in zip(ego, out, strict=True):
-        assert after.checkpoint == before.checkpoint and after.speed == before.speed
+        assert after.checkpoint == before.checkpoint
+        # a planned speed is kept behind another kart, else the line's speed profile binds (top speed)
+        kart_ahead = -INTERACTION_WINDOW < gap <= 0.0
+        assert after.speed == before.speed or (after.speed == PAPER_KART.top_speed and not kart_ahead)
         if after.lane != before.lane:
             # only moved onto the line's lane, and only where no other kart is predicted close in time
             assert after.lane == PLANNER._line_lanes[after.checkpoint % TRACK.n_checkpoints]
-            assert abs(gap) >= INTERACTION_WINDOW
+            assert not -INTERACTION_WINDOW < gap < BEHIND_WINDOW
             assert np.allclose(after.position, TRACK.lane_point(after.checkpoint, after.lane))
+
+
+def test_a_standing_start_beside_another_kart_keeps_its_lane_or_moves_away() -> None:
+    for lanes in ((2, 3), (3, 2)):
+        world = World(TRACK, 1, 2, SimParams(kart=PAPER_KART))
+        world.reset(start_lanes=lanes)
+        observation = observe(world, 0)[0]
+        for seed in range(5):
+            planner = MCTSPlanner()
+            planner.reset(RaceContext(TRACK, PAPER_KART, 0, 2, TRACK.lane_change_limit, seed))
+            me = planner.present_state(observation.me, 0.0, 0)
+            assert me.checkpoint == 1 and me.lane == lanes[0]  # the root: its predicted crossing of checkpoint 1
+            assert 0.0 < me.speed < 10.0 and me.time > 1.0  # from rest, not from a phantom crossing speed
+            plan = planner.plan(observation)
+            away = (lanes[0] - lanes[1]) > 0  # the ego's side of the other kart
+            for w in plan.ego_waypoints[:3]:  # while the two are still alongside
+                assert w.lane == lanes[0] or (w.lane > lanes[0]) == away, f"lane {w.lane} crosses toward the other"

@@ -1,0 +1,91 @@
+"""The tactical planner in traffic (issue 11): the collision window along a section, the line-following
+opponent model, line-calibrated segment times, and no plan collapse in a 4-kart race."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from controllers.race import RaceSpec, run_race
+from controllers.race_metrics import RaceMetrics
+from controllers.racing_line import optimise_racing_line
+from controllers.tactical import rules
+from controllers.tactical.calibration import calibrate_tables
+from controllers.tactical.game import GameParams, build_tables
+from sim_core.params import PAPER_KART
+from sim_core.track_io import get_track
+
+TRACK = get_track("oval")
+LINE = optimise_racing_line(TRACK, PAPER_KART)
+TABLES = calibrate_tables(build_tables(TRACK, PAPER_KART, GameParams()), TRACK, LINE, PAPER_KART)
+
+
+def _state(lanes: tuple[int, int], checkpoints: tuple[int, int], times: tuple[int, int]) -> np.ndarray:
+    state = np.zeros((2, rules.N_FIELDS), dtype=np.int64)
+    state[:, rules.LANE] = lanes
+    state[:, rules.PREV_LANE] = lanes
+    state[:, rules.CHECKPOINT] = checkpoints
+    state[:, rules.TIME] = times
+    state[:, rules.PREV_TIME] = times
+    state[:, rules.BIN] = 5
+    return state
+
+
+def test_a_follower_may_not_arrive_within_a_kart_length_behind_in_the_same_lane() -> None:
+    # player 1 drove checkpoint 0 -> 1 in lane 2 (0-based 1) slowly, from t = 0.00 to 1.40 s; player 0 follows 0.45 s
+    # later, faster
+    state = _state((1, 1), (0, 1), (45, 140))
+    state[1, rules.PREV_TIME] = 0
+    bins = len(TABLES.bin_low)
+    legal = 0
+    for vbin in range(bins):
+        arrival, _, ok = rules.move_outcome(TABLES, state, 0, 1, vbin)
+        speed = TABLES.distance[0, 0, 0] / ((arrival - 45) / 100.0) if ok else 0.0
+        if ok:
+            legal += 1
+            # legal only when the gap at the checkpoint (and along the section) is at least the distance window
+            assert (arrival - 140) / 100.0 * speed >= TABLES.collision_distance - 1e-6
+    assert legal < bins  # the fast bins, catching up within a kart length, are ruled out
+    # a lane away is always free of it
+    assert any(rules.move_outcome(TABLES, state, 0, 3, vbin)[2] for vbin in range(bins))
+
+
+def test_a_leader_need_not_yield_to_a_kart_behind_but_may_not_cut_across_one_alongside() -> None:
+    bins = len(TABLES.bin_low)
+    # player 0 leads player 1 (lane 3, 0-based 2) by 0.5 s: it may take player 1's lane
+    behind = _state((1, 2), (0, 0), (0, 50))
+    assert any(rules.move_outcome(TABLES, behind, 0, 2, vbin)[2] for vbin in range(bins))
+    # side by side (0.05 s apart): it may not
+    alongside = _state((1, 2), (0, 0), (0, 5))
+    assert not any(rules.move_outcome(TABLES, alongside, 0, 2, vbin)[2] for vbin in range(bins))
+
+
+def test_a_modelled_player_follows_the_racing_line_at_its_best_speed() -> None:
+    moves = np.empty(64, dtype=np.int64)
+    for c in range(TRACK.n_checkpoints):
+        state = _state((1, 2), (c, c), (0, 200))
+        state[1, rules.MODELLED] = 1
+        count = rules.legal_moves(TABLES, state, 1, moves)
+        assert count == 1
+        lane, _ = divmod(int(moves[0]), len(TABLES.bin_low))
+        assert lane + 1 == LINE.checkpoint_lanes[(c + 1) % TRACK.n_checkpoints]
+        # an unmodelled player keeps every choice
+        assert rules.legal_moves(TABLES, _state((1, 2), (c, c), (0, 200)), 1, moves) > 1
+
+
+def test_the_racing_line_is_the_cheapest_way_through_the_calibrated_game() -> None:
+    n = TRACK.n_checkpoints
+    cheapest = 0
+    for c in range(n):
+        here, there = LINE.checkpoint_lanes[c] - 1, LINE.checkpoint_lanes[(c + 1) % n] - 1
+        cheapest += int(TABLES.penalty[c, here, there] <= TABLES.penalty[c].min() + 1.0)  # within 0.01 s
+    assert cheapest >= 0.9 * n
+
+
+def test_four_kart_race_plans_never_collapse() -> None:
+    names = ("mcts-lqng", "fixed-lqng", "mcts-lqng", "fixed-lqng")
+    metrics = RaceMetrics(len(names))
+    outcome = run_race(RaceSpec(track="oval", controllers=names, laps=1, seed=3), on_step=metrics)
+    assert all(k.finished for k in outcome.result.karts)
+    horizon = GameParams().horizon
+    assert set(metrics.shortest_plan) == {0, 2}
+    assert min(metrics.shortest_plan.values()) >= horizon, metrics.shortest_plan
