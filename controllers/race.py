@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -27,6 +27,7 @@ class RaceSpec:
     start_lanes: tuple[int, ...] | None = None
     kart_preset: str = "paper"
     plan_latency: float = 0.1  # [s] simulated delay between requesting and applying a high-level plan
+    time_limit: float | None = None  # [s] end the race then (None: the rules' limit)
 
 
 @dataclass(frozen=True)
@@ -50,6 +51,8 @@ def run_race(spec: RaceSpec, *, record: bool = False) -> RaceOutcome:
     """Race ``spec`` to the end (everyone finished or the time limit) and return the result."""
     track = load_any_track(spec.track)
     params = SimParams(kart=kart_preset(spec.kart_preset))
+    if spec.time_limit is not None:
+        params = replace(params, rules=replace(params.rules, time_limit=spec.time_limit))
     n = len(spec.controllers)
     world = World(track, 1, n, params, laps=spec.laps)
     world.reset(start_lanes=spec.start_lanes)
