@@ -161,6 +161,7 @@ def train(
     checkpoint_steps: Annotated[int, typer.Option(help="a checkpoint every this many steps")] = 500_000,
     resume: Annotated[bool, typer.Option(help="continue from the model in OUT")] = False,
     threads: Annotated[int, typer.Option(help="torch threads (1 is fastest on a shared 2-core machine)")] = 1,
+    normalise_reward: Annotated[bool, typer.Option(help="running reward normalisation (not in the spec)")] = False,
 ) -> None:
     """Train an RL agent by PPO self-play on the training ovals (progress bar, checkpoints, log and curves)."""
     from controllers.rl.config import PPOConfig, agent_kind
@@ -170,7 +171,12 @@ def train(
     kind = agent_kind(agent)
     folder = out or Path("results") / "rl" / kind
     ppo = PPOConfig(
-        total_steps=steps, n_races=races, seed=seed, checkpoint_steps=checkpoint_steps, torch_threads=threads
+        total_steps=steps,
+        n_races=races,
+        seed=seed,
+        checkpoint_steps=checkpoint_steps,
+        torch_threads=threads,
+        normalise_reward=normalise_reward,
     )
     result = run_training(make_config(kind), ppo, folder, resume=resume, progress_bar=True)
     console.print(
