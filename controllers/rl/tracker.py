@@ -89,7 +89,7 @@ class RLTracker:
             raise ValueError(f"{self.agent} weights take {self.policy.obs_size} floats: no race size gives that")
         m = sizes[self.policy.obs_size]  # karts of the trained races (2 for the shipped agents)
         self._ctx = context
-        self.rng = np.random.default_rng([context.seed, context.ego])
+        self.rng = np.random.default_rng([abs(context.seed), context.ego])
         self.kart: KartParams = context.kart
         self.tables = TrackTables.of(track)
         self.lane_offsets = np.ascontiguousarray(track.sample_lane_offsets(), dtype=np.float64)
