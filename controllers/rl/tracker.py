@@ -65,8 +65,8 @@ class RLTracker:
 
     It samples its actions from the policy's Gaussian, as PPO's rollouts and ML-Agents' inference do, with a
     generator seeded by the race (``context.seed``, ``context.ego``), so a seeded race is repeatable;
-    ``deterministic`` takes the Gaussian's mean instead (the interim weights drive worse that way: their
-    pedal mean sits in the coasting third, see the manifest).
+    ``deterministic`` takes the Gaussian's mean instead (the interim weights drive worse that way: in some
+    spawns the mean pedal stays in the coasting third and the kart never starts).
     """
 
     def __init__(self, agent: AgentKind, folder: str | None = None, deterministic: bool = False) -> None:
