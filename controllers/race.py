@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -28,6 +28,7 @@ class RaceSpec:
     start_lanes: tuple[int, ...] | None = None
     kart_preset: str = "paper"
     plan_latency: float = 0.1  # [s] simulated delay between requesting and applying a high-level plan
+    time_limit: float | None = None  # [s] end the race then (None: the rules' limit)
 
 
 @dataclass(frozen=True)
@@ -57,6 +58,8 @@ def run_race(spec: RaceSpec, *, record: bool = False, on_step: StepHook | None =
     :class:`controllers.race_metrics.RaceMetrics`)."""
     track = load_any_track(spec.track)
     params = SimParams(kart=kart_preset(spec.kart_preset))
+    if spec.time_limit is not None:
+        params = replace(params, rules=replace(params.rules, time_limit=spec.time_limit))
     n = len(spec.controllers)
     world = World(track, 1, n, params, laps=spec.laps)
     world.reset(start_lanes=spec.start_lanes)

@@ -50,6 +50,7 @@ from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController, LaneFollowerParams
 from controllers.lq.tracker import FIXED_LINE_TRACKING, MCTS_TRACKING, LQNGTracker
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
+from controllers.rl.agents import E2EParams, FixedRLParams, MCTSRLParams, build_e2e, build_fixed_rl, build_mcts_rl
 from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import MCTSPlanner
 
@@ -148,6 +149,24 @@ _SPECS: tuple[ControllerSpec[Any], ...] = (
         "Pure pursuit on its start lane with a curvature-limited speed profile (a simple baseline).",
         LaneFollowerController,
         LaneFollowerParams,
+    ),
+    _spec(
+        "mcts-rl",
+        "MCTS tactical planner (1 Hz) tracked by a PPO self-play policy deciding at 25 Hz (the paper's MCTS-RL).",
+        build_mcts_rl,
+        MCTSRLParams,
+    ),
+    _spec(
+        "fixed-rl",
+        "The offline optimised racing line tracked by a PPO self-play policy deciding at 25 Hz (Fixed-RL).",
+        build_fixed_rl,
+        FixedRLParams,
+    ),
+    _spec(
+        "e2e",
+        "A PPO self-play policy driving end to end at 25 Hz toward the checkpoint centres, no planner (E2E).",
+        build_e2e,
+        E2EParams,
     ),
 )
 

@@ -161,8 +161,13 @@ def train(
     checkpoint_steps: Annotated[int, typer.Option(help="a checkpoint every this many steps")] = 500_000,
     resume: Annotated[bool, typer.Option(help="continue from the model in OUT")] = False,
     threads: Annotated[int, typer.Option(help="torch threads (1 is fastest on a shared 2-core machine)")] = 1,
+    normalise_reward: Annotated[bool, typer.Option(help="running reward normalisation (not in the spec)")] = False,
+    wall_hit_penalty: Annotated[float | None, typer.Option(help="per-ray wall penalty (spec: 50)")] = None,
+    near_wall_spawns: Annotated[float | None, typer.Option(help="near-wall spawn probability (spec: 0.3)")] = None,
 ) -> None:
     """Train an RL agent by PPO self-play on the training ovals (progress bar, checkpoints, log and curves)."""
+    from dataclasses import replace
+
     from controllers.rl.config import PPOConfig, agent_kind
     from controllers.rl.envs import make_config
     from controllers.rl.train import train as run_training
@@ -170,9 +175,19 @@ def train(
     kind = agent_kind(agent)
     folder = out or Path("results") / "rl" / kind
     ppo = PPOConfig(
-        total_steps=steps, n_races=races, seed=seed, checkpoint_steps=checkpoint_steps, torch_threads=threads
+        total_steps=steps,
+        n_races=races,
+        seed=seed,
+        checkpoint_steps=checkpoint_steps,
+        torch_threads=threads,
+        normalise_reward=normalise_reward,
     )
-    result = run_training(make_config(kind), ppo, folder, resume=resume, progress_bar=True)
+    env = make_config(kind)
+    if wall_hit_penalty is not None:
+        env = replace(env, weights=replace(env.weights, wall_hit=wall_hit_penalty))
+    if near_wall_spawns is not None:
+        env = replace(env, near_wall_probability=near_wall_spawns)
+    result = run_training(env, ppo, folder, resume=resume, progress_bar=True)
     console.print(
         f"{kind}: {result.timesteps} steps in {result.wall_s:.0f} s ({result.env_steps_per_s:,.0f} env steps/s); "
         f"model, statistics, log and curves in {result.out}"

@@ -69,6 +69,12 @@ def test_the_custom_track_is_written_imported_and_raced(tmp_path: Path) -> None:
     assert "DNF" not in out
 
 
+def test_the_rl_environments_example_runs_every_env_and_the_shipped_policy() -> None:
+    out = run_example("05_rl_env.py", "--decisions", "50")
+    assert "gymnasium: observation (220,)" in out
+    assert "shipped e2e policy" in out and "vector env: 16 races" in out and "pettingzoo: kart_0" in out
+
+
 @pytest.mark.parametrize("name", sorted(p.name for p in EXAMPLES.glob("*.py")))
 def test_every_example_explains_how_to_run_it(name: str) -> None:
     text = (EXAMPLES / name).read_text()

@@ -116,6 +116,10 @@ class PPOConfig:
     swap_steps: int = 10_000  # the opponent changes this often
     checkpoint_steps: int = 500_000
     seed: int = 0
+    # running reward normalisation (VecNormalize norm_reward). Off in the spec (ML-Agents had none). With the
+    # appendix's 50-per-ray wall penalty the value loss reaches ~1e5; normalised it stays ~1e-2 (measured), but
+    # on its own that did not get an agent driving: results/rl_interim/README.md
+    normalise_reward: bool = False
     # 1: on a 2-core machine shared with other work, two OpenMP threads waiting on each other made a 512-sample
     # gradient step of the 3x128 nets 40x slower (53 ms against 1.4 ms, measured)
     torch_threads: int = 1

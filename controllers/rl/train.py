@@ -148,7 +148,7 @@ def train(
         model = PPO.load(out / MODEL, env=venv, device="cpu")
     else:
         (out / LOG).unlink(missing_ok=True)
-        venv = VecNormalize(raw, norm_obs=True, norm_reward=False, clip_obs=10.0, gamma=ppo.gamma)
+        venv = VecNormalize(raw, norm_obs=True, norm_reward=ppo.normalise_reward, clip_obs=10.0, gamma=ppo.gamma)
         model = make_model(venv, ppo)
     callback = SelfPlayCallback(pool, venv, ppo, out)
     remaining = max(ppo.total_steps - model.num_timesteps, 0)

@@ -1,0 +1,100 @@
+"""The three learned agents as registered controllers: ``mcts-rl``, ``fixed-rl`` and ``e2e``.
+
+* ``mcts-rl``: the MCTS tactical planner (:class:`~controllers.tactical.high_level.MCTSPlanner`) composed with
+  the RL tracker (:class:`~controllers.rl.tracker.RLTracker`), which targets the plan's lanes and speeds;
+* ``fixed-rl``: the fixed racing-line planner (:class:`~controllers.fixed_line.FixedLinePlanner`) with the RL
+  tracker targeting its lanes at top speed;
+* ``e2e``: the RL policy alone (checkpoint centres as targets), a plain :class:`~controllers.base.Controller`.
+  The paper ran a background MCTS for E2E's delta-r / delta-v metrics only; it is left out here.
+
+Weights come from ``controllers/rl/weights/AGENT/policy.npz`` (shipped; see its ``manifest.json``). The
+folder is not a public parameter: requests name controllers, never paths. Every agent is registered whether
+or not its weights exist, so the registry always loads; a driver without weights raises
+:class:`~controllers.rl.policy.MissingWeightsError` at ``reset`` naming the folder and how to fill it.
+
+The ``build_*`` functions are module level so that their ``functools.partial`` factories pickle into the
+server's controller hosts and planner workers. Nothing here imports torch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from controllers.base import Action, Controller, RaceContext
+from controllers.fixed_line import FixedLinePlanner
+from controllers.hierarchical import HierarchicalController
+from controllers.parameters import parameter
+from controllers.rl.tracker import RLTracker
+from controllers.tactical.game import GameParams
+from controllers.tactical.high_level import MCTSPlanner
+from sim_core.observation import Observation
+
+RL_RATE_HZ = 50.0  # called every step; the tracker itself decides at 25 Hz and holds its action
+
+
+@dataclass(frozen=True)
+class MCTSRLParams:
+    """Public parameters of ``mcts-rl``."""
+
+    iterations: int = parameter(2000, "MCTS iterations per plan", minimum=1, maximum=20_000)
+    horizon: int = parameter(8, "checkpoints the tactical game looks ahead", minimum=1, maximum=16)
+    planner_rate_hz: float = parameter(1.0, "re-plans per second", unit="Hz", minimum=0.1, maximum=10.0)
+    deterministic: bool = parameter(False, "act with the policy's mean instead of sampling its Gaussian (seeded)")
+
+
+@dataclass(frozen=True)
+class FixedRLParams:
+    """Public parameters of ``fixed-rl``."""
+
+    line_margin_m: float = parameter(
+        1.0, "how far the planner's racing line keeps inside the walls", unit="m", minimum=0.5, maximum=3.0
+    )
+    deterministic: bool = parameter(False, "act with the policy's mean instead of sampling its Gaussian (seeded)")
+
+
+@dataclass(frozen=True)
+class E2EParams:
+    """Public parameters of ``e2e`` (the policy is the whole driver)."""
+
+    deterministic: bool = parameter(False, "act with the policy's mean instead of sampling its Gaussian (seeded)")
+
+
+def build_mcts_rl(params: MCTSRLParams) -> Controller:
+    """MCTS planner + RL tracker."""
+    planner = MCTSPlanner(
+        iterations=params.iterations, rate_hz=params.planner_rate_hz, params=GameParams(horizon=params.horizon)
+    )
+    return HierarchicalController(
+        "mcts-rl", planner, RLTracker("mcts-rl", deterministic=params.deterministic), rate_hz=RL_RATE_HZ
+    )
+
+
+def build_fixed_rl(params: FixedRLParams) -> Controller:
+    """Fixed racing-line planner + RL tracker."""
+    planner = FixedLinePlanner(margin=params.line_margin_m)
+    return HierarchicalController(
+        "fixed-rl", planner, RLTracker("fixed-rl", deterministic=params.deterministic), rate_hz=RL_RATE_HZ
+    )
+
+
+class E2EController:
+    """The end-to-end agent: the RL policy on checkpoint-centre targets, no planner."""
+
+    name = "e2e"
+    rate_hz = RL_RATE_HZ
+
+    def __init__(self, folder: str | None = None, deterministic: bool = False) -> None:
+        self.tracker = RLTracker("e2e", folder, deterministic)
+
+    def reset(self, context: RaceContext) -> None:
+        """Load the weights and start a race."""
+        self.tracker.reset(context)
+
+    def act(self, observation: Observation) -> Action:
+        """The policy's inputs (a new decision every 40 ms)."""
+        return self.tracker.act(observation, None)
+
+
+def build_e2e(params: E2EParams) -> Controller:
+    """The end-to-end agent."""
+    return E2EController(deterministic=params.deterministic)

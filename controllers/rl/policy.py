@@ -1,0 +1,133 @@
+"""A trained agent's policy for inference: the PPO actor's mean action, in numpy, from a weights folder.
+
+The trainer (:mod:`controllers.rl.train`) writes Stable-Baselines3 files (``model.zip``, ``vecnormalize.pkl``);
+:func:`export_policy` turns them into ``policy.npz``: the actor's layers (3x128 tanh, then the linear action
+head), the running observation mean and variance and the clip of the normaliser. Inference reads only that
+file (``numpy.load`` without pickles), so a controller host needs neither torch nor Stable-Baselines3 and a
+decision costs a few microseconds of matrix products. Torch is imported by :func:`export_policy` alone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+POLICY_FILE = "policy.npz"
+WEIGHTS_ROOT = Path(__file__).resolve().parent / "weights"
+NORM_EPSILON = 1e-8  # VecNormalize's epsilon
+
+
+def weights_folder(agent: str) -> Path:
+    """The shipped weights folder of ``agent`` (``controllers/rl/weights/AGENT``)."""
+    return WEIGHTS_ROOT / agent
+
+
+class MissingWeightsError(FileNotFoundError):
+    """An RL agent was asked to drive but its weights folder holds no ``policy.npz``."""
+
+
+@dataclass(frozen=True)
+class Policy:
+    """The deterministic actor: ``act(obs)`` is the Gaussian's mean, clipped to [-1, 1]."""
+
+    weights: tuple[np.ndarray, ...]  # per layer (out, in)
+    biases: tuple[np.ndarray, ...]
+    obs_mean: np.ndarray
+    obs_var: np.ndarray
+    clip_obs: float
+    log_std: np.ndarray  # (2,) the Gaussian's state-independent log standard deviation
+
+    @property
+    def obs_size(self) -> int:
+        """Floats in one (stacked) observation."""
+        return int(self.obs_mean.shape[0])
+
+    def normalise(self, obs: np.ndarray) -> np.ndarray:
+        """The trainer's observation normalisation (running mean and variance, clipped)."""
+        z = (obs - self.obs_mean) / np.sqrt(self.obs_var + NORM_EPSILON)
+        return np.clip(z, -self.clip_obs, self.clip_obs)
+
+    def act(self, obs: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
+        """(2,) ``[steer, pedal]`` in [-1, 1] for one raw observation (D,): the Gaussian's mean, or a sample
+        from it with ``rng`` (as ML-Agents' inference and PPO's training rollouts act)."""
+        mean = self.mean(obs)
+        if rng is not None:
+            mean = mean + np.exp(self.log_std) * rng.standard_normal(mean.shape)
+        return np.clip(mean, -1.0, 1.0)
+
+    def mean(self, obs: np.ndarray) -> np.ndarray:
+        """(2,) the action distribution's mean (unclipped)."""
+        h = self.normalise(np.asarray(obs, dtype=np.float64))
+        last = len(self.weights) - 1
+        for i, (w, b) in enumerate(zip(self.weights, self.biases)):
+            h = w @ h + b
+            if i < last:
+                h = np.tanh(h)
+        return h
+
+
+def load_policy(folder: Path | str) -> Policy:
+    """The policy in ``folder`` (its ``policy.npz``); :class:`MissingWeightsError` says how to make one."""
+    return _load(str(Path(folder).resolve()))
+
+
+@lru_cache(maxsize=8)
+def _load(folder: str) -> Policy:
+    path = Path(folder) / POLICY_FILE
+    if not path.exists():
+        raise MissingWeightsError(
+            f"no trained weights at {path}: train the agent (karting train AGENT --out FOLDER) and export them "
+            "(python -m controllers.rl.policy FOLDER), or use the shipped controllers/rl/weights/AGENT"
+        )
+    with np.load(path, allow_pickle=False) as data:
+        n = int(data["n_layers"])
+        return Policy(
+            tuple(data[f"w{i}"] for i in range(n)),
+            tuple(data[f"b{i}"] for i in range(n)),
+            data["obs_mean"],
+            data["obs_var"],
+            float(data["clip_obs"]),
+            data["log_std"],
+        )
+
+
+def export_policy(folder: Path | str, out: Path | str | None = None) -> Path:
+    """Write ``policy.npz`` (into ``out``, default ``folder``) from the trainer's ``model.zip`` and
+    ``vecnormalize.pkl`` in ``folder``."""
+    import pickle
+
+    from stable_baselines3 import PPO
+
+    folder = Path(folder)
+    target = Path(out) if out is not None else folder
+    target.mkdir(parents=True, exist_ok=True)
+    model = PPO.load(folder / "model.zip", device="cpu")
+    state = {k: v.detach().cpu().numpy().astype(np.float32) for k, v in model.policy.state_dict().items()}
+    layers = sorted(
+        {int(k.split(".")[2]) for k in state if k.startswith("mlp_extractor.policy_net.") and k.endswith("weight")}
+    )
+    names = [f"mlp_extractor.policy_net.{i}" for i in layers] + ["action_net"]
+    with (folder / "vecnormalize.pkl").open("rb") as fh:
+        norm = pickle.load(fh)  # the trainer's own file (trusted); SB3 saves VecNormalize by pickle
+    arrays: dict[str, np.ndarray] = {
+        "n_layers": np.array(len(names)),
+        "obs_mean": np.asarray(norm.obs_rms.mean, dtype=np.float64),
+        "obs_var": np.asarray(norm.obs_rms.var, dtype=np.float64),
+        "clip_obs": np.array(float(norm.clip_obs)),
+        "log_std": state["log_std"],
+    }
+    for i, name in enumerate(names):
+        arrays[f"w{i}"] = state[f"{name}.weight"]
+        arrays[f"b{i}"] = state[f"{name}.bias"]
+    path = target / POLICY_FILE
+    np.savez_compressed(path, **arrays)  # type: ignore[arg-type]
+    return path
+
+
+if __name__ == "__main__":
+    import sys
+
+    print(export_policy(*sys.argv[1:3]))

@@ -1,0 +1,64 @@
+"""Ship a trained RL agent: export ``policy.npz`` from a ``karting train`` folder into
+``controllers/rl/weights/AGENT/`` with the normalisation statistics, the log, the curves and a manifest.
+
+From the repo root::
+
+    .venv/bin/python scripts/ship_rl_weights.py e2e results/rl/e2e --seed 0 --wall-s 420 --commit abc1234 \
+        --command "karting train e2e --steps 3000000" --note "interim weights"
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import platform
+import shutil
+from pathlib import Path
+
+from controllers.rl.policy import export_policy, weights_folder
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("agent")
+    parser.add_argument("folder", type=Path, help="the karting train output folder")
+    parser.add_argument("--command", required=True)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--wall-s", type=float, required=True)
+    parser.add_argument("--commit", required=True, help="git commit the training ran on")
+    parser.add_argument("--note", default="")
+    args = parser.parse_args()
+    out = weights_folder(args.agent)
+    out.mkdir(parents=True, exist_ok=True)
+    export_policy(args.folder, out)
+    for name in ("vecnormalize.pkl", "curves.png", "training_log.csv"):
+        shutil.copy(args.folder / name, out / name)
+    with (args.folder / "training_log.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    rewards = [(int(r["timesteps"]), float(r["ep_rew_mean"])) for r in rows if r["ep_rew_mean"]]
+    manifest = {
+        "agent": args.agent,
+        "command": args.command,
+        "seed": args.seed,
+        "steps": int(rows[-1]["timesteps"]),
+        "wall_s": round(args.wall_s, 1),
+        "machine": f"{platform.node()} {platform.machine()} {os.cpu_count()} cores, {platform.python_version()}",
+        "git_commit": args.commit,
+        "files": {
+            "policy.npz": "the actor (3x128 tanh + action head), observation mean/variance/clip, log std: inference",
+            "vecnormalize.pkl": "Stable-Baselines3 VecNormalize statistics (the same mean/variance)",
+            "training_log.csv": "one row per PPO update",
+            "curves.png": "reward, episode length, value loss",
+        },
+        "first_ep_rew_mean": rewards[0] if rewards else None,
+        "last_ep_rew_mean": rewards[-1] if rewards else None,
+        "note": args.note,
+    }
+    (out / "manifest.json").write_text(json.dumps(manifest, indent=2) + "\n")
+    print(out)
+
+
+if __name__ == "__main__":
+    main()
