@@ -39,6 +39,9 @@ def test_published_parameters_are_the_dataclass_fields_and_defaults_lie_within_b
     assert dict(spec.parameters) == {f.name: str(f.default) for f in fields}
     for p in spec.parameter_list:
         assert p.description, f"{name}.{p.name} is undocumented"
+        if p.type == "bool":  # a switch has nothing to bound
+            assert isinstance(p.default, bool)
+            continue
         assert p.minimum is not None and p.maximum is not None, f"{name}.{p.name} has no bounds"
         assert isinstance(p.default, int | float) and p.minimum <= p.default <= p.maximum
     assert validate_parameters(name, {}) == spec.params_type()
@@ -111,8 +114,8 @@ def test_an_unknown_controller_is_still_a_key_error() -> None:
 
 @given(data=hs.data())
 def test_any_value_within_bounds_is_accepted_and_any_outside_refused(data: hs.DataObject) -> None:
-    name = data.draw(hs.sampled_from(controller_names()))
-    p = data.draw(hs.sampled_from(REGISTRY[name].parameter_list))
+    numeric = [(n, p) for n in controller_names() for p in REGISTRY[n].parameter_list if p.type in ("int", "float")]
+    name, p = data.draw(hs.sampled_from(numeric))
     assert p.minimum is not None and p.maximum is not None
     if p.type == "int":
         inside: object = data.draw(hs.integers(math.ceil(p.minimum), int(p.maximum)))
@@ -123,6 +126,15 @@ def test_any_value_within_bounds_is_accepted_and_any_outside_refused(data: hs.Da
     assert getattr(validate_parameters(name, {p.name: inside}), p.name) == inside
     with pytest.raises(ParameterError):
         validate_parameters(name, {p.name: outside})
+
+
+def test_a_switch_takes_true_or_false_only() -> None:
+    switches = [(n, p) for n in controller_names() for p in REGISTRY[n].parameter_list if p.type == "bool"]
+    assert switches  # the RL agents' deterministic mode
+    for name, p in switches:
+        assert getattr(validate_parameters(name, {p.name: True}), p.name) is True
+        with pytest.raises(ParameterError):
+            validate_parameters(name, {p.name: 1})
 
 
 def test_a_validated_factory_pickles_for_the_worker_processes() -> None:
