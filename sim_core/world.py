@@ -165,13 +165,7 @@ class World:
                 raise ValueError(f"start lanes must be in 1..{n_lanes}, got {list(lanes)}")
         start_wear = self.params.rules.start_wear if wear is None else wear
         for b in self._race_list(races):
-            self.fstate[b] = 0.0
-            self.istate[b] = 0
-            self.rstate[b] = 0
-            self.pair_flags[b] = 0
-            self.pass_start[b] = 0
-            self.target_lane[b] = 0
-            self.target_speed[b] = np.nan
+            self.clear_race(b)
             for k in range(self.n_karts):
                 row, col = divmod(k, 4)
                 lane = lanes[k] if k < len(lanes) else DEFAULT_START_LANES[col]
@@ -179,6 +173,16 @@ class World:
                 d = float(self.track.lane_offsets(0)[lane - 1])
                 self.place_kart(b, k, s=offset, d=d, wear=start_wear)
         self.sense()
+
+    def clear_race(self, race: int) -> None:
+        """Zero every counter of race ``race`` (its karts must then be placed with :meth:`place_kart`)."""
+        self.fstate[race] = 0.0
+        self.istate[race] = 0
+        self.rstate[race] = 0
+        self.pair_flags[race] = 0
+        self.pass_start[race] = 0
+        self.target_lane[race] = 0
+        self.target_speed[race] = np.nan
 
     def place_kart(
         self,

@@ -23,13 +23,7 @@ MAX_SPAWN_WEAR = 0.95
 
 def clear_race(world: World, race: int) -> None:
     """Zero every counter of one race (as :meth:`World.reset` does) without re-sensing the other races."""
-    world.fstate[race] = 0.0
-    world.istate[race] = 0
-    world.rstate[race] = 0
-    world.pair_flags[race] = 0
-    world.pass_start[race] = 0
-    world.target_lane[race] = 0
-    world.target_speed[race] = np.nan
+    world.clear_race(race)
 
 
 def racing_lane_at_checkpoints(track: Track) -> np.ndarray:
