@@ -178,8 +178,8 @@ def kart_step(
     if v_abs > 1e-6 and curvature_abs * v_abs * v_abs > a_lat:
         curvature = math.copysign(a_lat / (v_abs * v_abs), curvature_cmd)
     slip_target = math.asin(min(max(0.5 * wheelbase * curvature, -1.0), 1.0))
-    slip_limit = max_slip(p)
-    slip = min(max(slip, -slip_limit), slip_limit)
+    # |slip| stays within the full-lock slip without a clip: the target is within it, and the new slip lies
+    # between the old one and the target, or moves toward zero (walls clip the slip they set)
     if v_abs > 1e-6:
         # course (heading + slip) change over the step = omega(slip') dt + (slip' - slip), kept within
         # a_lat / v * dt; omega is linearised around the current slip (exact to second order in the change)
@@ -190,7 +190,7 @@ def kart_step(
         budget = a_lat / max(0.5 * (abs(speed) + v_abs), 1e-6) * dt
         low = slip + (-budget - course_from_yaw) / gain
         high = slip + (budget - course_from_yaw) / gain
-        new_slip = min(max(min(max(slip_target, low), high), -slip_limit), slip_limit)
+        new_slip = min(max(slip_target, low), high)
         yaw_rate = 2.0 * new_speed * math.sin(new_slip) / wheelbase
         yaw_cap = a_lat / v_abs
         if abs(yaw_rate) > yaw_cap:
@@ -198,9 +198,7 @@ def kart_step(
             # turning): the yaw saturates and the slip alone keeps the course within its budget
             yaw_rate = math.copysign(yaw_cap, yaw_rate)
             turn = yaw_rate * dt
-            new_slip = min(
-                max(min(max(slip_target, slip - budget - turn), slip + budget - turn), -slip_limit), slip_limit
-            )
+            new_slip = min(max(slip_target, slip - budget - turn), slip + budget - turn)
         slip = new_slip
     else:
         slip = slip_target
