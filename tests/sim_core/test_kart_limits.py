@@ -206,3 +206,17 @@ def test_the_lane_follower_reaches_top_speed_on_a_straight() -> None:
         world.step(actions)
         best = max(best, float(world.speeds[0, 0]))
     assert best >= 14.7
+
+
+def test_the_slip_never_leaves_the_full_lock_slip() -> None:
+    """The step keeps |slip| within the full-lock slip without clipping it (random inputs, full-lock wall
+    scrapes and pushes in 64 two-kart races)."""
+    world = World(get_track("complex"), 64, 2, sensors=False)
+    limit = max_slip(world.kart_vector)
+    rng = np.random.default_rng(1)
+    worst = 0.0
+    for i in range(1500):
+        actions = rng.uniform(-1.0, 1.0, (64, 2, 2)) if i % 7 else np.tile([1.0, 1.0], (64, 2, 1))
+        world.step(actions)
+        worst = max(worst, float(np.abs(world.fstate[:, :, st.F_SLIP]).max()))
+    assert limit * 0.9 < worst <= limit * (1 + 1e-12)  # it does reach full lock
