@@ -9,6 +9,7 @@ seed; the tree is kept in preallocated arrays.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 from numba import njit
@@ -355,19 +356,25 @@ class SearchTree:
             child = int(self.next_sibling[child])
         return out
 
-    def principal_variation(self, min_visits: int = 1) -> list[int]:
+    def principal_variation(
+        self, min_visits: int = 1, override: Callable[[int, list[int], int], int] | None = None
+    ) -> list[int]:
         """Nodes from the root following the most visited child (ties: higher mean value), as long as that
-        child has at least ``min_visits`` visits (deeper choices rest on too few samples to trust)."""
+        child has at least ``min_visits`` visits (deeper choices rest on too few samples to trust).
+        ``override(parent, children, best)`` may pick another child instead (a planner's commitment)."""
         path = [0]
         while True:
             kids = self.children(path[-1])
             if not kids:
                 return path
-            best = max(kids, key=self._rank)
+            best = max(kids, key=self.rank)
             if len(path) > 1 and int(self.visits[best]) < min_visits:
                 return path
+            if override is not None:
+                best = override(path[-1], kids, best)
             path.append(best)
 
-    def _rank(self, node: int) -> tuple[int, float]:
+    def rank(self, node: int) -> tuple[int, float]:
+        """(visits, mean value) of ``node``: how a child is chosen."""
         visits = int(self.visits[node])
         return visits, float(self.value[node]) / max(visits, 1)

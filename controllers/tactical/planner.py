@@ -150,27 +150,23 @@ class TacticalPlanner:
         """The most visited line through the tree, keeping the ego's committed lanes unless a choice beats
         them by ``COMMIT_MARGIN`` (both choices visited at least ``PLAN_MIN_VISITS`` times)."""
         bins = len(self.tables.bin_low)
-        path = [0]
-        while True:
-            kids = tree.children(path[-1])
-            if not kids:
-                return path
-            best = max(kids, key=tree._rank)
-            if len(path) > 1 and int(tree.visits[best]) < PLAN_MIN_VISITS:
-                return path
-            if int(tree.mover[path[-1]]) == 0:
-                want = committed.get(int(tree.state[best][0, rules.CHECKPOINT]))
-                if want is not None and int(tree.action[best]) // bins != want - 1:
-                    keep = [
-                        k
-                        for k in kids
-                        if int(tree.action[k]) // bins == want - 1 and int(tree.visits[k]) >= PLAN_MIN_VISITS
-                    ]
-                    if keep:
-                        alt = max(keep, key=tree._rank)
-                        if tree._rank(alt)[1] >= tree._rank(best)[1] - COMMIT_MARGIN:
-                            best = alt
-            path.append(best)
+
+        def keep_commitment(parent: int, kids: list[int], best: int) -> int:
+            if int(tree.mover[parent]) != 0:
+                return best
+            want = committed.get(int(tree.state[best][0, rules.CHECKPOINT]))
+            if want is None or int(tree.action[best]) // bins == want - 1:
+                return best
+            keep = [
+                k for k in kids if int(tree.action[k]) // bins == want - 1 and int(tree.visits[k]) >= PLAN_MIN_VISITS
+            ]
+            if keep:
+                alt = max(keep, key=tree.rank)
+                if tree.rank(alt)[1] >= tree.rank(best)[1] - COMMIT_MARGIN:
+                    return alt
+            return best
+
+        return tree.principal_variation(PLAN_MIN_VISITS, keep_commitment)
 
     def _extract(
         self,
