@@ -164,6 +164,9 @@ def train(
     normalise_reward: Annotated[bool, typer.Option(help="running reward normalisation (not in the spec)")] = False,
     wall_hit_penalty: Annotated[float | None, typer.Option(help="per-ray wall penalty (spec: 50)")] = None,
     near_wall_spawns: Annotated[float | None, typer.Option(help="near-wall spawn probability (spec: 0.3)")] = None,
+    log_std_init: Annotated[float, typer.Option(help="initial log std of the Gaussian actions (SB3: 0)")] = 0.0,
+    ent_coef: Annotated[float, typer.Option(help="entropy bonus (spec: 5e-3)")] = 5e-3,
+    gamma: Annotated[float, typer.Option(help="discount per decision (spec: 0.99)")] = 0.99,
 ) -> None:
     """Train an RL agent by PPO self-play on the training ovals (progress bar, checkpoints, log and curves)."""
     from dataclasses import replace
@@ -181,6 +184,9 @@ def train(
         checkpoint_steps=checkpoint_steps,
         torch_threads=threads,
         normalise_reward=normalise_reward,
+        log_std_init=log_std_init,
+        ent_coef=ent_coef,
+        gamma=gamma,
     )
     env = make_config(kind)
     if wall_hit_penalty is not None:

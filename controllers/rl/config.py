@@ -120,6 +120,10 @@ class PPOConfig:
     # appendix's 50-per-ray wall penalty the value loss reaches ~1e5; normalised it stays ~1e-2 (measured), but
     # on its own that did not get an agent driving: results/rl_interim/README.md
     normalise_reward: bool = False
+    # initial log standard deviation of the Gaussian actions (SB3's default 0: std 1 over a [-1, 1] range). At
+    # std 1 the steering noise alone slowed training rollouts to half the mean's speed and the std never fell
+    # in 2M steps (measured on the interim weights: results/rl_interim/README.md)
+    log_std_init: float = 0.0
     # 1: on a 2-core machine shared with other work, two OpenMP threads waiting on each other made a 512-sample
     # gradient step of the 3x128 nets 40x slower (53 ms against 1.4 ms, measured)
     torch_threads: int = 1

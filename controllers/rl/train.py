@@ -124,7 +124,11 @@ def make_model(venv: VecNormalize, ppo: PPOConfig) -> PPO:
         gae_lambda=ppo.gae_lambda,
         clip_range=ppo.clip_range,
         ent_coef=ppo.ent_coef,
-        policy_kwargs={"net_arch": {"pi": list(ppo.hidden), "vf": list(ppo.hidden)}, "activation_fn": torch.nn.Tanh},
+        policy_kwargs={
+            "net_arch": {"pi": list(ppo.hidden), "vf": list(ppo.hidden)},
+            "activation_fn": torch.nn.Tanh,
+            "log_std_init": ppo.log_std_init,
+        },
         seed=ppo.seed,
         device="cpu",
         verbose=0,
