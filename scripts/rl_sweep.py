@@ -49,13 +49,13 @@ def train_all(variants: list[dict], out: Path, steps: int, races: int) -> dict[s
 
 def _race(args: tuple[str, str, str, str, bool, int]) -> dict:
     """One race of a trained policy against ``opponent`` (runs in a worker process)."""
+    from controllers.fixed_line import FixedLinePlanner
+    from controllers.hierarchical import HierarchicalController
+    from controllers.race import RaceSpec, run_race
+    from controllers.registry import REGISTRY, ControllerSpec, register
+    from controllers.rl.agents import RL_RATE_HZ, E2EController
     from controllers.rl.policy import export_policy
     from controllers.rl.tracker import RLTracker
-    from controllers.hierarchical import HierarchicalController
-    from controllers.fixed_line import FixedLinePlanner
-    from controllers.race import RaceSpec, run_race
-    from controllers.registry import ControllerSpec, register, REGISTRY
-    from controllers.rl.agents import E2EController, RL_RATE_HZ
 
     folder, agent, track, opponent, deterministic, seed = args
     if not (Path(folder) / "policy.npz").exists():
@@ -100,11 +100,11 @@ def evaluate(variants: list[dict], out: Path, tracks: list[str], races: int, wor
     with ProcessPoolExecutor(workers) as pool:
         results = list(pool.map(_race, [j[1] for j in jobs]))
     summary: dict[str, dict] = {}
-    for (name, job), res in zip(jobs, results):
+    for (name, _job), res in zip(jobs, results):
         key = f"{res['track']}/{'mean' if res['deterministic'] else 'sample'}"
         cell = summary.setdefault(name, {}).setdefault(key, [])
         cell.append(res)
-    for name, cells in summary.items():
+    for cells in summary.values():
         for key, rows in cells.items():
             times = [r["time"] for r in rows if r["time"] is not None]
             cells[key] = {
