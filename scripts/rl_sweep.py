@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from controllers.rl.policy import export_policy
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -54,12 +56,9 @@ def _race(args: tuple[str, str, str, str, bool, int]) -> dict:
     from controllers.race import RaceSpec, run_race
     from controllers.registry import REGISTRY, ControllerSpec, register
     from controllers.rl.agents import RL_RATE_HZ, E2EController
-    from controllers.rl.policy import export_policy
     from controllers.rl.tracker import RLTracker
 
     folder, agent, track, opponent, deterministic, seed = args
-    if not (Path(folder) / "policy.npz").exists():
-        export_policy(folder)
     name = f"sweep-{abs(hash((folder, deterministic))) % 10**8}"
     if name not in REGISTRY:
         if agent == "e2e":
@@ -93,6 +92,7 @@ def evaluate(variants: list[dict], out: Path, tracks: list[str], races: int, wor
         folder = str(out / v["name"])
         if not (Path(folder) / "model.zip").exists():
             continue
+        export_policy(folder)  # before the workers start: they only read it
         for track in tracks:
             for det in (True, False):
                 for seed in range(races):

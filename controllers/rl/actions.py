@@ -11,6 +11,7 @@ standstill is a hold, not reverse.
 from __future__ import annotations
 
 import numpy as np
+from scipy.special import ndtr
 
 from sim_core.params import KartParams
 
@@ -21,6 +22,22 @@ def pedal_branch(pedal: np.ndarray) -> np.ndarray:
     """0 = brake, 1 = coast, 2 = accelerate, from the pedal action in [-1, 1] (NaN coasts)."""
     p = np.nan_to_num(np.asarray(pedal, dtype=float), nan=0.0)
     return np.where(p < -1.0 / 3.0, BRAKE, np.where(p > 1.0 / 3.0, ACCELERATE, COAST))
+
+
+def most_probable_pedal(mean: np.ndarray, std: np.ndarray) -> np.ndarray:
+    """The pedal of the branch the Gaussian N(``mean``, ``std``) most likely picks: -1 (brake), 0 (coast) or
+    +1 (accelerate).
+
+    The deterministic counterpart of a discrete branch's argmax (what ML-Agents' deterministic inference does
+    with the original's 3-way branch). The Gaussian's mean alone is not: a mean just inside the coasting third,
+    with most of the mass above +1/3, would coast where the trained policy almost always accelerates.
+    """
+    mu = np.asarray(mean, dtype=float)
+    sigma = np.maximum(np.asarray(std, dtype=float), 1e-9)
+    brake = ndtr((-1.0 / 3.0 - mu) / sigma)
+    accelerate = 1.0 - ndtr((1.0 / 3.0 - mu) / sigma)
+    coast = 1.0 - brake - accelerate
+    return np.select([(brake > coast) & (brake > accelerate), accelerate > coast], [-1.0, 1.0], default=0.0)
 
 
 def branch_acceleration(kart: KartParams, speed: np.ndarray, branch: np.ndarray) -> np.ndarray:

@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from controllers.rl.actions import most_probable_pedal
+
 POLICY_FILE = "policy.npz"
 WEIGHTS_ROOT = Path(__file__).resolve().parent / "weights"
 NORM_EPSILON = 1e-8  # VecNormalize's epsilon
@@ -31,7 +33,7 @@ class MissingWeightsError(FileNotFoundError):
 
 @dataclass(frozen=True)
 class Policy:
-    """The deterministic actor: ``act(obs)`` is the Gaussian's mean, clipped to [-1, 1]."""
+    """The trained actor: a Gaussian over ``[steer, pedal]`` (:meth:`act` samples it or decides by it)."""
 
     weights: tuple[np.ndarray, ...]  # per layer (out, in)
     biases: tuple[np.ndarray, ...]
@@ -51,12 +53,14 @@ class Policy:
         return np.clip(z, -self.clip_obs, self.clip_obs)
 
     def act(self, obs: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
-        """(2,) ``[steer, pedal]`` in [-1, 1] for one raw observation (D,): the Gaussian's mean, or a sample
-        from it with ``rng`` (as ML-Agents' inference and PPO's training rollouts act)."""
+        """(2,) ``[steer, pedal]`` in [-1, 1] for one raw observation (D,): a sample from the Gaussian with
+        ``rng`` (as PPO's training rollouts act), else its mean steer with the pedal branch the Gaussian most
+        likely picks (:func:`controllers.rl.actions.most_probable_pedal`)."""
         mean = self.mean(obs)
+        std = np.exp(self.log_std)
         if rng is not None:
-            mean = mean + np.exp(self.log_std) * rng.standard_normal(mean.shape)
-        return np.clip(mean, -1.0, 1.0)
+            return np.clip(mean + std * rng.standard_normal(mean.shape), -1.0, 1.0)
+        return np.array([np.clip(mean[0], -1.0, 1.0), most_probable_pedal(mean[1], std[1])])
 
     def mean(self, obs: np.ndarray) -> np.ndarray:
         """(2,) the action distribution's mean (unclipped)."""
@@ -94,6 +98,9 @@ def _load(folder: str) -> Policy:
         )
 
 
+INFERENCE_ONLY = {"learning_rate": 0.0, "lr_schedule": lambda _: 0.0, "clip_range": lambda _: 0.0}
+
+
 def export_policy(folder: Path | str, out: Path | str | None = None) -> Path:
     """Write ``policy.npz`` (into ``out``, default ``folder``) from the trainer's ``model.zip`` and
     ``vecnormalize.pkl`` in ``folder``."""
@@ -104,7 +111,8 @@ def export_policy(folder: Path | str, out: Path | str | None = None) -> Path:
     folder = Path(folder)
     target = Path(out) if out is not None else folder
     target.mkdir(parents=True, exist_ok=True)
-    model = PPO.load(folder / "model.zip", device="cpu")
+    # the schedules are not needed for inference; skipping them also loads models saved by another Python
+    model = PPO.load(folder / "model.zip", device="cpu", custom_objects=INFERENCE_ONLY)
     state = {k: v.detach().cpu().numpy().astype(np.float32) for k, v in model.policy.state_dict().items()}
     layers = sorted(
         {int(k.split(".")[2]) for k in state if k.startswith("mlp_extractor.policy_net.") and k.endswith("weight")}

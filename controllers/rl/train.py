@@ -21,6 +21,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.running_mean_std import RunningMeanStd
+from stable_baselines3.common.utils import LinearSchedule
 from stable_baselines3.common.vec_env import VecNormalize
 
 from controllers.rl.batch import RaceBatch
@@ -116,7 +117,9 @@ def make_model(venv: VecNormalize, ppo: PPOConfig) -> PPO:
     return PPO(
         "MlpPolicy",
         venv,
-        learning_rate=lambda remaining: ppo.learning_rate * remaining,
+        # a schedule object, not a lambda: cloudpickle stores a lambda's bytecode, and a model saved by another
+        # Python version then crashes the loader (a 3.12-trained model segfaulted 3.11's PPO.load)
+        learning_rate=LinearSchedule(ppo.learning_rate, 0.0, 1.0),
         n_steps=n_steps,
         batch_size=min(ppo.batch_size, n_steps * venv.num_envs),
         n_epochs=ppo.n_epochs,
@@ -149,7 +152,10 @@ def train(
     if resuming:
         venv = VecNormalize.load(str(out / NORMALISER), raw)
         venv.training = True
-        model = PPO.load(out / MODEL, env=venv, device="cpu")
+        schedule = LinearSchedule(ppo.learning_rate, 0.0, 1.0)
+        model = PPO.load(
+            out / MODEL, env=venv, device="cpu", custom_objects={"learning_rate": schedule, "lr_schedule": schedule}
+        )
     else:
         (out / LOG).unlink(missing_ok=True)
         venv = VecNormalize(raw, norm_obs=True, norm_reward=ppo.normalise_reward, clip_obs=10.0, gamma=ppo.gamma)
