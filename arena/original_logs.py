@@ -79,7 +79,7 @@ def log_files(folder: str | Path) -> list[LogFile]:
             found[log.key] = log
     if not found:
         raise FileNotFoundError(f"no race logs (A_vs_B_TrackN.txt) in {folder}")
-    return [found[key] for key in sorted(found)]
+    return sorted(found.values(), key=lambda log: (list(TRACK_NAMES.values()).index(log.track), log.key))
 
 
 def _blocks(path: Path) -> Iterator[tuple[int, int, list[tuple[int, str]]]]:
