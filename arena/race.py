@@ -7,6 +7,7 @@ The headless race itself is :func:`controllers.race.run_race`, re-exported here 
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -48,7 +49,8 @@ class RaceJob:
 
 @dataclass(frozen=True)
 class FinishedRace:
-    """A race run to its end: the referee's result, the laps raced, wall time and the replay (a JSON dict)."""
+    """A race run to its end: the referee's result, the laps raced, the job's wall time (building the drivers
+    included) and the replay (a JSON dict)."""
 
     job: RaceJob
     result: RaceResult
@@ -63,10 +65,11 @@ class FinishedRace:
 
 def run_job(job: RaceJob, record: bool = True) -> FinishedRace:
     """Run ``job`` (in whatever process calls it); ``record``: keep the replay."""
+    started = time.perf_counter()
     outcome = run_race(job.spec(), record=record)
     laps = job.laps if job.laps is not None else load_any_track(job.track).laps
     replay = asdict(outcome.replay) if outcome.replay is not None else None
-    return FinishedRace(job, outcome.result, laps, outcome.wall_seconds, replay)
+    return FinishedRace(job, outcome.result, laps, time.perf_counter() - started, replay)
 
 
 def kart_figures(agent: str, kart: KartResult) -> KartFigures:
