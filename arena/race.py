@@ -13,7 +13,14 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures
+from controllers.base import Action, Controller, PlanningDriver, RaceContext
+from controllers.hierarchical import HierarchicalController
+from controllers.plan import Plan
 from controllers.race import RaceOutcome, RaceSpec, load_any_track, run_race
+from controllers.registry import make_controller, validate_parameters
+from controllers.tactical.game import GameParams
+from controllers.tactical.high_level import MCTSPlanner
+from sim_core.observation import Observation
 from sim_core.world import KartResult, RaceResult
 
 __all__ = ["FinishedRace", "RaceJob", "RaceOutcome", "RaceSpec", "race_figures", "run_job", "run_race"]
@@ -32,6 +39,7 @@ class RaceJob:
     time_limit: float | None = None  # [s] None: the rules' limit
     kart_preset: str = "paper"
     plan_latency: float = 0.1  # [s]
+    background_planners: tuple[str, ...] = ()  # agents given an MCTS planner in the background (Δr, Δv only)
 
     def spec(self) -> RaceSpec:
         """The headless race to run."""
@@ -63,10 +71,43 @@ class FinishedRace:
         return race_figures(self.job, self.result.karts, self.result.duration, race_id)
 
 
+class PlanIgnoringTracker:
+    """A whole driver in the tracker's place: it drives as it always does and never sees the plan."""
+
+    def __init__(self, driver: Controller) -> None:
+        self.driver = driver
+
+    def reset(self, context: RaceContext) -> None:
+        """Reset the driver."""
+        self.driver.reset(context)
+
+    def act(self, observation: Observation, plan: Plan | None) -> Action:
+        """The driver's own inputs (``plan`` is ignored)."""
+        return self.driver.act(observation)
+
+
+def with_background_planner(agent: str) -> Controller:
+    """``agent`` driving unchanged while the MCTS tactical planner (``mcts-rl``'s settings) plans for its kart in the
+    background, so the referee measures its Δr and Δv against the plans, as the paper did for E2E. An agent that
+    plans already is returned as it is."""
+    driver = make_controller(agent)
+    if isinstance(driver, PlanningDriver):
+        return driver
+    settings = validate_parameters("mcts-rl", {})
+    game = GameParams(horizon=settings.horizon)
+    planner = MCTSPlanner(iterations=settings.iterations, rate_hz=settings.planner_rate_hz, params=game)
+    return HierarchicalController(agent, planner, PlanIgnoringTracker(driver), rate_hz=driver.rate_hz)
+
+
+def job_drivers(job: RaceJob) -> list[Controller]:
+    """The drivers of ``job``: registered controllers, those in ``background_planners`` with a background planner."""
+    return [with_background_planner(a) if a in job.background_planners else make_controller(a) for a in job.agents]
+
+
 def run_job(job: RaceJob, record: bool = True) -> FinishedRace:
     """Run ``job`` (in whatever process calls it); ``record``: keep the replay."""
     started = time.perf_counter()
-    outcome = run_race(job.spec(), record=record)
+    outcome = run_race(job.spec(), record=record, drivers=job_drivers(job))
     laps = job.laps if job.laps is not None else load_any_track(job.track).laps
     replay = asdict(outcome.replay) if outcome.replay is not None else None
     return FinishedRace(job, outcome.result, laps, time.perf_counter() - started, replay)

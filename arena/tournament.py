@@ -43,6 +43,8 @@ class TournamentSpec:
     time_limit: float | None = None  # [s] None: the rules' limit
     kart_preset: str = "paper"
     plan_latency: float = 0.1  # [s]
+    # agents without a planner given the MCTS planner in the background for their Δr / Δv (as the paper's E2E)
+    background_planners: tuple[str, ...] = ("e2e",)
 
     def problems(self) -> dict[str, str]:
         """What is wrong with this spec, by field (empty: nothing)."""
@@ -96,6 +98,7 @@ class TournamentSpec:
                         self.time_limit,
                         self.kart_preset,
                         self.plan_latency,
+                        tuple(agent for agent in (a, b) if agent in self.background_planners),
                     )
                     jobs.append(job)
         return jobs
@@ -108,13 +111,20 @@ class TournamentSpec:
     def to_json(self) -> dict[str, Any]:
         """A JSON-able dict (stored with the tournament)."""
         data = asdict(self)
-        return {**data, "agents": list(self.agents), "tracks": list(self.tracks)}
+        return {
+            **data,
+            "agents": list(self.agents),
+            "tracks": list(self.tracks),
+            "background_planners": list(self.background_planners),
+        }
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> TournamentSpec:
         """Read back :meth:`to_json`."""
-        values = dict(data)
-        return cls(**{**values, "agents": tuple(values["agents"]), "tracks": tuple(values["tracks"])})
+        values = {**data, "agents": tuple(data["agents"]), "tracks": tuple(data["tracks"])}
+        if "background_planners" in values:
+            values["background_planners"] = tuple(values["background_planners"])
+        return cls(**values)
 
 
 class RaceStore(Protocol):
