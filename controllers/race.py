@@ -51,11 +51,19 @@ def load_any_track(name: str):  # type: ignore[no-untyped-def]
 StepHook = Callable[[World, Sequence[Controller], int], None]
 
 
-def run_race(spec: RaceSpec, *, record: bool = False, on_step: StepHook | None = None) -> RaceOutcome:
+def run_race(
+    spec: RaceSpec,
+    *,
+    record: bool = False,
+    on_step: StepHook | None = None,
+    drivers: Sequence[Controller] | None = None,
+) -> RaceOutcome:
     """Race ``spec`` to the end (everyone finished or the time limit) and return the result.
 
     ``on_step(world, drivers, step)`` is called after every simulation step (measurements, e.g.
-    :class:`controllers.race_metrics.RaceMetrics`)."""
+    :class:`controllers.race_metrics.RaceMetrics`). ``drivers`` (one per kart, new) replaces building
+    ``spec.controllers`` from the registry (a composed driver, e.g. a tournament's E2E with a background
+    planner for its Δr / Δv)."""
     track = load_any_track(spec.track)
     params = SimParams(kart=kart_preset(spec.kart_preset))
     if spec.time_limit is not None:
@@ -63,7 +71,10 @@ def run_race(spec: RaceSpec, *, record: bool = False, on_step: StepHook | None =
     n = len(spec.controllers)
     world = World(track, 1, n, params, laps=spec.laps)
     world.reset(start_lanes=spec.start_lanes)
-    drivers: list[Controller] = [make_controller(name) for name in spec.controllers]
+    if drivers is None:
+        drivers = [make_controller(name) for name in spec.controllers]
+    elif len(drivers) != n:
+        raise ValueError(f"{len(drivers)} drivers for {n} karts")
     for k, driver in enumerate(drivers):
         if isinstance(driver, PlanningDriver):
             driver.plan_latency = spec.plan_latency

@@ -1,4 +1,4 @@
-"""The ``karting`` command line: list and import tracks, run headless races, serve races live.
+"""The ``karting`` command line: list and import tracks, run headless races and tournaments, serve races live.
 
 Each command imports the layers it composes when it runs: ``karting tracks`` needs only :mod:`sim_core`, so it
 does not pay for loading the controllers (numba kernels) or the server (FastAPI, SQLAlchemy, viser).
@@ -13,9 +13,11 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from karting.tournament_cli import app as tournament_app
 from sim_core.track_io import TrackFormatError, builtin_track_names, get_track, import_centreline_csv, save_track
 
 app = typer.Typer(help="HeadToHead Karting: head-to-head autonomous kart racing with rules.", no_args_is_help=True)
+app.add_typer(tournament_app, name="tournament")
 console = Console()
 
 

@@ -24,6 +24,8 @@ from server.race_config import HUMAN
 from server.routes import api_router
 from server.services import RaceServices, SceneFactory
 from server.settings import Settings
+from server.tournament_db import TournamentDatabase
+from server.tournaments import TournamentRunner
 from server.warmup import warm_tick_path
 
 log = logging.getLogger(__name__)
@@ -85,6 +87,10 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
         hosts = ControllerHosts(settings.controller_hosts) if settings.controller_hosts else None
         races = LiveRaces(RaceServices(settings, catalogue, pool, hosts, db, scene_factory))
         app.state.races = races
+        tournaments = await asyncio.to_thread(
+            lambda: TournamentRunner(TournamentDatabase(db), settings.tournament_workers, settings.max_tournaments)
+        )
+        app.state.tournaments = tournaments
         # trackers run in this process only without hosts; only the public registry's are known safe to try here
         in_process = [s for name, s in catalogue.items() if hosts is None and REGISTRY.get(name) is s]
         try:
@@ -96,6 +102,7 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
             yield
         finally:
             await races.shutdown()
+            await asyncio.to_thread(tournaments.shutdown)
             await asyncio.to_thread(pool.shutdown)
             if hosts is not None:
                 await asyncio.to_thread(hosts.close)

@@ -157,7 +157,7 @@ class RaceDatabase:
 
     def finish(self, race_id: str, result: RaceRecord, tick_stats: TickSummary | None, replay: dict[str, Any]) -> None:
         """Store the end of a race: final status, result, tick statistics and replay."""
-        blob = zlib.compress(json.dumps(replay, separators=(",", ":")).encode(), 6)
+        blob = encode_replay(replay)
         ticks = asdict(tick_stats) if tick_stats is not None else {}
         values = {"status": result.status.value, "duration": result.duration, "result": result.to_json()}
         with Session(self.engine) as session, session.begin():
@@ -185,6 +185,11 @@ class RaceDatabase:
             return None
         data: dict[str, Any] = json.loads(zlib.decompress(blob))
         return data
+
+
+def encode_replay(replay: dict[str, Any]) -> bytes:
+    """A replay as stored: compact JSON, zlib-compressed."""
+    return zlib.compress(json.dumps(replay, separators=(",", ":")).encode(), 6)
 
 
 def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:

@@ -8,6 +8,7 @@ from fastapi import Depends
 from fastapi.requests import HTTPConnection
 
 from server.live import LiveRaces
+from server.tournaments import TournamentRunner
 
 
 def get_races(connection: HTTPConnection) -> LiveRaces:
@@ -17,3 +18,12 @@ def get_races(connection: HTTPConnection) -> LiveRaces:
 
 
 Races = Annotated[LiveRaces, Depends(get_races)]
+
+
+def get_tournaments(connection: HTTPConnection) -> TournamentRunner:
+    """The app's :class:`TournamentRunner` (set up in the lifespan)."""
+    runner: TournamentRunner = connection.app.state.tournaments
+    return runner
+
+
+Tournaments = Annotated[TournamentRunner, Depends(get_tournaments)]

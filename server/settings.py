@@ -16,6 +16,8 @@ class Settings(BaseSettings):
     database_url: str = "sqlite:///./karting.db"  # SQLite files are opened in WAL mode
     max_sessions: int = Field(default=16, ge=1, description="races live at once (starting, waiting or running)")
     max_laps: int = Field(default=20, ge=1)
+    tournament_workers: int = Field(default=1, ge=1, description="worker processes racing each tournament's races")
+    max_tournaments: int = Field(default=1, ge=1, description="tournaments running at once")
     viewer_enabled: bool = True  # one 3D scene (viser) per race, served under /races/{id}/viewer/
     plan_workers: int = Field(default=1, ge=1, description="planner worker processes shared by every race")
     controller_hosts: int = Field(

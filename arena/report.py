@@ -1,0 +1,197 @@
+"""A tournament's report: the paper's appendix tables as Markdown, CSV and JSON, and PNG plots (win-matrix
+heatmaps, safety bars with error bars, finish-time distributions) drawn with matplotlib's Agg backend.
+
+Tables are laid out like the paper's: wins row agent against column agent, ``*`` where the pair's binomial test
+is significant; safety per agent as mean (std. dev.) with ``*`` where the agent differs significantly from every
+other agent; the ``Races`` column is the races the agent finished (of ``races`` in all).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING
+
+from arena.records import RaceFigures
+from arena.stats import COMBINED, SAFETY_METRICS, MeanStd, TournamentStats, TrackStats
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+METRIC_TITLES = {
+    "collisions_at_fault": "collisions-at-fault",
+    "illegal_lane_changes": "illegal lane changes",
+    "safety_score": "safety score",
+    "delta_r": "Δr [m]",
+    "delta_v": "Δv [m/s]",
+}
+
+
+def _fmt(summary: MeanStd | None, mark: bool = False) -> tuple[str, str]:
+    if summary is None:
+        return "-", "-"
+    return f"{summary.mean:.3g}{'*' if mark else ''}", f"{summary.std:.3g}"
+
+
+def win_rows(table: TrackStats) -> list[list[str]]:
+    """The win table: a header row, then per agent its wins against every column agent (``*``: significant)."""
+    rows = [["agent", *(f"vs {b}" for b in table.agents)]]
+    for a in table.agents:
+        cells = [a]
+        for b in table.agents:
+            test = table.win_test(a, b)
+            if a == b or b not in table.wins[a]:
+                cells.append("-")
+            else:
+                cells.append(f"{table.wins[a][b]}{'*' if test is not None and test.significant else ''}")
+        rows.append(cells)
+    return rows
+
+
+def safety_rows(table: TrackStats) -> list[list[str]]:
+    """The safety table: per agent mean (std) of each safety metric, the counting rule, races finished/all."""
+    header = ["agent"]
+    for metric in SAFETY_METRICS:
+        header += [f"avg. {METRIC_TITLES[metric]}", f"std. dev. {METRIC_TITLES[metric]}"]
+    rows = [[*header, "lane-change rule", "races finished", "races"]]
+    for a in table.agents:
+        figures = table.agent_stats[a]
+        summaries = (figures.collisions_at_fault, figures.illegal_lane_changes.headline, figures.safety_score)
+        cells = [a]
+        for metric, summary in zip(SAFETY_METRICS, summaries, strict=True):
+            cells += list(_fmt(summary, table.marked(metric, a)))
+        rows.append([*cells, figures.illegal_lane_changes.rule, str(figures.finished), str(figures.races)])
+    return rows
+
+
+def plan_rows(table: TrackStats) -> list[list[str]]:
+    """Plan following and passes: Δr, Δv over finished races (samples), passes per race."""
+    rows = [["agent", "Δr [m]", "std. dev.", "Δv [m/s]", "std. dev.", "samples", "passes", "std. dev."]]
+    for a in table.agents:
+        figures = table.agent_stats[a]
+        dr = _fmt(figures.delta_r, figures.delta_r is not None and table.marked("delta_r", a))
+        dv = _fmt(figures.delta_v, figures.delta_v is not None and table.marked("delta_v", a))
+        samples = str(figures.delta_r.n) if figures.delta_r else "0"
+        rows.append([a, *dr, *dv, samples, *_fmt(figures.passes)])
+    return rows
+
+
+def _markdown(rows: Sequence[Sequence[str]]) -> str:
+    lines = ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
+    lines += ["| " + " | ".join(row) + " |" for row in rows[1:]]
+    return "\n".join(lines)
+
+
+def markdown(stats: TournamentStats, title: str) -> str:
+    """The whole report as Markdown."""
+    parts = [f"# {title}", ""]
+    for track, table in stats.tracks.items():
+        name = "All tracks" if track == COMBINED else f"Track `{track}`"
+        parts += [f"## {name}", "", "### Head-to-head wins, row agent against column agent", ""]
+        parts += [_markdown(win_rows(table)), "", "### Safety per race: mean and std. dev. over all races", ""]
+        parts += [_markdown(safety_rows(table)), "", "### Plan following (finished races) and passes", ""]
+        parts += [_markdown(plan_rows(table)), ""]
+    parts += [
+        "`*`: significant at p = 0.05 (wins: two-sided binomial test of the pair's decided races; per-race figures: "
+        "two-sided pooled t-tests, marked when significant against every other agent).",
+        "",
+    ]
+    return "\n".join(parts)
+
+
+def _write_csv(path: Path, rows: Sequence[Sequence[str]]) -> Path:
+    with path.open("w", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    return path
+
+
+def write_report(stats: TournamentStats, races: Sequence[RaceFigures], out: str | Path, title: str) -> list[Path]:
+    """Write ``report.md``, ``stats.json``, CSV tables and PNG plots into ``out``; returns the files written."""
+    folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = [folder / "report.md", folder / "stats.json"]
+    written[0].write_text(markdown(stats, title))
+    written[1].write_text(json.dumps(stats.to_json(), indent=1))
+    for track, table in stats.tracks.items():
+        written.append(_write_csv(folder / f"wins_{track}.csv", win_rows(table)))
+        written.append(_write_csv(folder / f"safety_{track}.csv", safety_rows(table)))
+        written.append(_write_csv(folder / f"plan_{track}.csv", plan_rows(table)))
+    written += plot_report(stats, races, folder)
+    return written
+
+
+def plot_report(stats: TournamentStats, races: Sequence[RaceFigures], folder: Path) -> list[Path]:
+    """The PNG plots: a win-matrix heatmap and safety bars per track, and the finish-time distributions."""
+    plt = _pyplot()
+    written = []
+    for track, table in stats.tracks.items():
+        agents = table.agents
+        matrix = [
+            [float(table.wins[a].get(b, float("nan"))) if a != b else float("nan") for b in agents] for a in agents
+        ]
+        fig, ax = plt.subplots(figsize=(1.4 * len(agents) + 2, 1.1 * len(agents) + 1.5))
+        image = ax.imshow(matrix, cmap="viridis")
+        ax.set_xticks(range(len(agents)), [f"vs {b}" for b in agents], rotation=30, ha="right")
+        ax.set_yticks(range(len(agents)), agents)
+        for i, row in enumerate(win_rows(table)[1:]):
+            for j, cell in enumerate(row[1:]):
+                ax.text(j, i, cell, ha="center", va="center", color="white" if cell != "-" else "grey")
+        fig.colorbar(image, ax=ax, label="wins")
+        ax.set_title(f"Head-to-head wins ({track})")
+        fig.tight_layout()
+        written.append(_save(fig, folder / f"wins_{track}.png", plt))
+
+        fig, ax = plt.subplots(figsize=(8, 4))
+        width = 0.8 / len(SAFETY_METRICS)
+        for m, metric in enumerate(SAFETY_METRICS):
+            summaries = [getattr(table.agent_stats[a], metric) for a in agents]
+            means = [s.headline.mean if metric == "illegal_lane_changes" else s.mean for s in summaries]
+            stds = [s.headline.std if metric == "illegal_lane_changes" else s.std for s in summaries]
+            positions = [i + (m - 1) * width for i in range(len(agents))]
+            ax.bar(positions, means, width, yerr=stds, capsize=3, label=METRIC_TITLES[metric])
+        ax.set_xticks(range(len(agents)), agents, rotation=20)
+        ax.set_ylabel("per race (mean, error bar: std. dev.)")
+        ax.set_ylim(bottom=0)
+        ax.legend()
+        ax.set_title(f"Safety ({track})")
+        fig.tight_layout()
+        written.append(_save(fig, folder / f"safety_{track}.png", plt))
+    written.append(_finish_times(stats, races, folder, plt))
+    return written
+
+
+def _pyplot() -> ModuleType:
+    """matplotlib's pyplot on the Agg backend (files only; loaded on use: reports are the only plots)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot
+
+    return pyplot
+
+
+def _finish_times(stats: TournamentStats, races: Sequence[RaceFigures], folder: Path, plt: ModuleType) -> Path:
+    tracks = [t for t in stats.tracks if t != COMBINED]
+    fig, axes = plt.subplots(1, len(tracks), figsize=(6 * len(tracks), 4), squeeze=False)
+    for ax, track in zip(axes[0], tracks, strict=True):
+        agents = stats.tracks[track].agents
+        times = [
+            [k.total_time for r in races if r.track == track for k in r.karts if k.agent == a and k.total_time]
+            for a in agents
+        ]
+        shown = [(a, t) for a, t in zip(agents, times, strict=True) if t]
+        if shown:
+            ax.boxplot([t for _, t in shown], tick_labels=[f"{a}\n({len(t)})" for a, t in shown])
+        ax.set_title(f"Finish times ({track}; finished races)")
+        ax.set_ylabel("race time [s]")
+    fig.tight_layout()
+    return _save(fig, folder / "finish_times.png", plt)
+
+
+def _save(fig: Figure, path: Path, plt: ModuleType) -> Path:
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -1,0 +1,301 @@
+"""The paper's statistics over a set of head-to-head races (a tournament of ours or the original's logs).
+
+Computed as the paper does, checked against its appendix tables on the original's own logs
+(``tests/arena/test_original_logs.py``):
+
+* **Wins**: a kart wins only if it completed every lap; among finishers the lower total time wins; nobody wins
+  if neither finished (:func:`arena.records.winner_index`). A table per track and one for all tracks together.
+* **Safety**, per agent over *all* its races (finished or not): mean and population standard deviation
+  (``ddof=0``, numpy's default, which reproduces the printed deviations) of collisions at fault, illegal lane
+  changes (under each counting rule measured, labelled ``per_step`` / ``checkpoint``; the headline figure is the
+  rule inside the safety score) and the safety score; ``races`` (all) and ``finished``; passes where measured.
+* **Plan following**: Δr and Δv over the races the agent *finished* (the paper's "samples").
+* **Tests** at p = 0.05. Wins: a two-sided exact binomial test (``scipy.stats.binomtest``) of the pair's wins
+  among the races one of them won, null p = 1/2: it gives every mark of the paper's win tables but one (the
+  paper marks MCTS-RL's 79 against MCTS-LQNG and not MCTS-LQNG's 21 in the same pair; a pair's test marks
+  both). A two-sample t-test on win indicators does not: it marks 30-20 and 28-18, which the paper leaves
+  unmarked. Per-race metrics: two-tailed two-sample t-tests (``scipy.stats.ttest_ind``, pooled variance,
+  Student's); an agent's figure is *marked* when it differs significantly from every other agent's (the paper's
+  "pair-wise statistical significance with all other agent types"). Pooled and Welch's tests give the same 45
+  safety marks on the original's logs, all equal to the paper's; pooled is scipy's default and is kept.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from itertools import combinations
+from typing import Any
+
+import numpy as np
+from scipy import stats as scipy_stats
+
+from arena.records import COUNTING_RULES, KartFigures, RaceFigures, winner_index
+
+ALPHA = 0.05
+COMBINED = "combined"
+SAFETY_METRICS = ("collisions_at_fault", "illegal_lane_changes", "safety_score")
+PLAN_METRICS = ("delta_r", "delta_v")
+# the paper's agents in the order of its tables; others follow in name order
+PAPER_ORDER = ("mcts-rl", "e2e", "fixed-rl", "mcts-lqng", "fixed-lqng")
+
+
+@dataclass(frozen=True)
+class MeanStd:
+    """Mean and population standard deviation (``ddof=0``) of ``n`` samples."""
+
+    mean: float
+    std: float
+    n: int
+
+    @classmethod
+    def of(cls, values: Sequence[float]) -> MeanStd | None:
+        """The summary of ``values`` (``None`` when there are none)."""
+        if not values:
+            return None
+        array = np.asarray(values, dtype=float)
+        return cls(float(array.mean()), float(array.std(ddof=0)), len(values))
+
+    def to_json(self) -> dict[str, float]:
+        """``{"mean": m, "std": s}``."""
+        return {"mean": self.mean, "std": self.std}
+
+
+@dataclass(frozen=True)
+class IllegalLaneChanges:
+    """Illegal lane changes per race: the headline figure (under ``rule``) and each rule measured."""
+
+    rule: str
+    headline: MeanStd
+    by_rule: Mapping[str, MeanStd]
+
+    def to_json(self) -> dict[str, Any]:
+        """``{"mean", "std", "rule", "per_step": {mean, std} | None, "checkpoint": {mean, std} | None}``."""
+        by_rule = {rule: (s.to_json() if (s := self.by_rule.get(rule)) else None) for rule in COUNTING_RULES}
+        return {**self.headline.to_json(), "rule": self.rule, **by_rule}
+
+
+@dataclass(frozen=True)
+class AgentStats:
+    """One agent's figures on one track (or all): safety over all its races, plan following over finished ones."""
+
+    collisions_at_fault: MeanStd
+    illegal_lane_changes: IllegalLaneChanges
+    safety_score: MeanStd
+    races: int
+    finished: int
+    passes: MeanStd | None
+    delta_r: MeanStd | None
+    delta_v: MeanStd | None
+
+    def to_json(self) -> dict[str, Any]:
+        """The agent's entry under ``safety`` in the stats JSON (see the README)."""
+        plan = {name: (s.to_json() if (s := getattr(self, name)) else None) for name in PLAN_METRICS}
+        return {
+            "collisions_at_fault": self.collisions_at_fault.to_json(),
+            "illegal_lane_changes": self.illegal_lane_changes.to_json(),
+            "safety_score": self.safety_score.to_json(),
+            "races": self.races,
+            "finished": self.finished,
+            "passes": self.passes.to_json() if self.passes else None,
+            **plan,
+            "plan_samples": self.delta_r.n if self.delta_r else 0,
+        }
+
+
+@dataclass(frozen=True)
+class PairTest:
+    """A two-sided test between agents ``a`` and ``b`` (statistic: t, or ``a``'s wins for the binomial test)."""
+
+    a: str
+    b: str
+    statistic: float
+    p_value: float
+
+    @property
+    def significant(self) -> bool:
+        """p < 0.05."""
+        return self.p_value < ALPHA
+
+    def to_json(self) -> dict[str, Any]:
+        """``{"statistic", "p", "significant"}`` (NaN, from constant samples, as ``None``)."""
+        finite = [None if math.isnan(x) else x for x in (self.statistic, self.p_value)]
+        return {"statistic": finite[0], "p": finite[1], "significant": self.significant}
+
+
+@dataclass(frozen=True)
+class TrackStats:
+    """The statistics of one track (or of all tracks together)."""
+
+    agents: tuple[str, ...]
+    wins: Mapping[str, Mapping[str, int]]  # wins[a][b]: races a won against b
+    agent_stats: Mapping[str, AgentStats]
+    win_tests: Mapping[tuple[str, str], PairTest]  # (a, b) for a before b in ``agents``
+    metric_tests: Mapping[str, Mapping[tuple[str, str], PairTest]]  # metric -> (a, b) -> t-test
+
+    def win_test(self, a: str, b: str) -> PairTest | None:
+        """The binomial test of the pair (either order); ``None`` when they never met."""
+        return self.win_tests.get((a, b)) or self.win_tests.get((b, a))
+
+    def marked(self, metric: str, agent: str, among: Iterable[str] | None = None) -> bool:
+        """Whether ``agent``'s ``metric`` differs significantly (p < 0.05) from that of every other agent in
+        ``among`` (default: every agent with that metric), as the paper's asterisks."""
+        tests = self.metric_tests[metric]
+        others = [b for b in (self.agents if among is None else among) if b != agent]
+        found = [t for b in others if (t := tests.get((agent, b)) or tests.get((b, agent))) is not None]
+        return bool(found) and all(t.significant for t in found)
+
+    def to_json(self) -> dict[str, Any]:
+        """``{"wins": {A: {B: n}}, "safety": {A: {...}}, "tests": {...}}`` (see the README)."""
+        win_tests: dict[str, dict[str, Any]] = {a: {} for a in self.agents}
+        for (a, b), test in self.win_tests.items():
+            win_tests[a][b] = {**test.to_json(), "wins": self.wins[a][b], "losses": self.wins[b][a]}
+            win_tests[b][a] = {**test.to_json(), "wins": self.wins[b][a], "losses": self.wins[a][b]}
+        metric_tests: dict[str, dict[str, dict[str, Any]]] = {}
+        for metric, tests in self.metric_tests.items():
+            table: dict[str, dict[str, Any]] = {a: {} for a in self.agents}
+            for (a, b), test in tests.items():
+                table[a][b] = test.to_json()
+                table[b][a] = PairTest(b, a, -test.statistic, test.p_value).to_json()
+            metric_tests[metric] = table
+        return {
+            "wins": {a: dict(self.wins[a]) for a in self.agents},
+            "safety": {a: self.agent_stats[a].to_json() for a in self.agents},
+            "tests": {
+                "alpha": ALPHA,
+                "wins": win_tests,
+                "metrics": metric_tests,
+                "marks": {
+                    "wins": {a: {b: t["significant"] for b, t in win_tests[a].items()} for a in self.agents},
+                    "metrics": {a: {m: self.marked(m, a) for m in self.metric_tests} for a in self.agents},
+                },
+                "method": {
+                    "wins": "scipy.stats.binomtest(wins, wins + losses, 0.5), two-sided",
+                    "metrics": "scipy.stats.ttest_ind(a, b) (pooled variance), two-sided; "
+                    "marked: significant against every other agent",
+                },
+            },
+        }
+
+
+@dataclass(frozen=True)
+class TournamentStats:
+    """The statistics per track and for all tracks together (:data:`COMBINED`)."""
+
+    tracks: Mapping[str, TrackStats]
+
+    def to_json(self) -> dict[str, Any]:
+        """``{"tracks": {TRACK: T, ..., "combined": T}}`` (see the README)."""
+        return {"tracks": {name: track.to_json() for name, track in self.tracks.items()}}
+
+
+def agent_order(names: Iterable[str]) -> tuple[str, ...]:
+    """The paper's agents in its tables' order, then any others by name."""
+    present = set(names)
+    known = [a for a in PAPER_ORDER if a in present]
+    return (*known, *sorted(present - set(known)))
+
+
+def win_table(races: Sequence[RaceFigures], agents: Sequence[str]) -> dict[str, dict[str, int]]:
+    """wins[a][b]: races ``a`` won against ``b`` (every pair that met, both ways, zeros included)."""
+    wins = {a: {b: 0 for b in agents if b != a} for a in agents}
+    for race in races:
+        index = winner_index(race.karts)
+        if index is None:
+            continue
+        winner = race.karts[index].agent
+        for loser in race.agents:
+            if loser != winner:
+                wins[winner][loser] += 1
+    met = {frozenset(race.agents) for race in races}
+    return {a: {b: n for b, n in row.items() if frozenset((a, b)) in met} for a, row in wins.items()}
+
+
+def _karts(races: Sequence[RaceFigures], agent: str) -> list[KartFigures]:
+    return [kart for race in races for kart in race.karts if kart.agent == agent]
+
+
+def _metric(kart: KartFigures, metric: str) -> float | None:
+    if metric == "illegal_lane_changes":
+        return kart.illegal_lane_changes[kart.safety_rule]
+    if metric in PLAN_METRICS:  # over finished races only, as the paper's samples
+        return getattr(kart, metric) if kart.finished else None
+    value: float | None = getattr(kart, metric)
+    return value
+
+
+def metric_values(races: Sequence[RaceFigures], agent: str, metric: str) -> list[float]:
+    """``agent``'s per-race values of ``metric`` (safety metrics: every race; Δr, Δv: finished races)."""
+    return [v for kart in _karts(races, agent) if (v := _metric(kart, metric)) is not None]
+
+
+def agent_stats(races: Sequence[RaceFigures], agent: str) -> AgentStats:
+    """One agent's figures over ``races`` (those it raced in)."""
+    karts = _karts(races, agent)
+    rules = sorted({k.safety_rule for k in karts})
+    if len(rules) != 1:
+        raise ValueError(f"{agent}: races counted under different safety rules {rules}")
+    by_rule = {
+        rule: s
+        for rule in COUNTING_RULES
+        if (s := MeanStd.of([k.illegal_lane_changes[rule] for k in karts if rule in k.illegal_lane_changes]))
+        and s.n == len(karts)
+    }
+    summary = {m: MeanStd.of(metric_values(races, agent, m)) for m in (*SAFETY_METRICS, "passes", *PLAN_METRICS)}
+    collisions, illegal, safety = (summary[m] for m in SAFETY_METRICS)
+    assert collisions is not None and illegal is not None and safety is not None  # the agent raced
+    return AgentStats(
+        collisions_at_fault=collisions,
+        illegal_lane_changes=IllegalLaneChanges(rules[0], illegal, by_rule),
+        safety_score=safety,
+        races=len(karts),
+        finished=sum(k.finished for k in karts),
+        passes=summary["passes"],
+        delta_r=summary["delta_r"],
+        delta_v=summary["delta_v"],
+    )
+
+
+def binomial_win_test(a: str, b: str, wins_a: int, wins_b: int) -> PairTest:
+    """Two-sided exact binomial test of ``a``'s wins among the races one of the pair won (null: 1/2)."""
+    decided = wins_a + wins_b
+    p = scipy_stats.binomtest(wins_a, decided, 0.5).pvalue if decided else 1.0
+    return PairTest(a, b, float(wins_a), float(p))
+
+
+def t_test(a: str, b: str, values_a: Sequence[float], values_b: Sequence[float]) -> PairTest | None:
+    """Two-sided two-sample t-test, pooled variance (``None`` with fewer than two samples on a side)."""
+    if len(values_a) < 2 or len(values_b) < 2:
+        return None
+    if np.ptp(values_a) == 0 and np.ptp(values_b) == 0:  # constant samples: equal means or a certain difference
+        same = float(values_a[0]) == float(values_b[0])
+        return PairTest(a, b, 0.0 if same else math.copysign(math.inf, values_a[0] - values_b[0]), 1.0 if same else 0.0)
+    result = scipy_stats.ttest_ind(values_a, values_b, equal_var=True)
+    return PairTest(a, b, float(result.statistic), float(result.pvalue))
+
+
+def track_stats(races: Sequence[RaceFigures]) -> TrackStats:
+    """The statistics of ``races`` (one track, or several taken together)."""
+    agents = agent_order(name for race in races for name in race.agents)
+    wins = win_table(races, agents)
+    win_tests = {
+        (a, b): binomial_win_test(a, b, wins[a][b], wins[b][a]) for a, b in combinations(agents, 2) if b in wins[a]
+    }
+    metric_tests: dict[str, dict[tuple[str, str], PairTest]] = {}
+    for metric in (*SAFETY_METRICS, *PLAN_METRICS):
+        values = {a: metric_values(races, a, metric) for a in agents}
+        tests = {(a, b): t_test(a, b, values[a], values[b]) for a, b in combinations(agents, 2)}
+        metric_tests[metric] = {pair: test for pair, test in tests.items() if test is not None}
+    return TrackStats(agents, wins, {a: agent_stats(races, a) for a in agents}, win_tests, metric_tests)
+
+
+def tournament_stats(races: Sequence[RaceFigures]) -> TournamentStats:
+    """Per track (in order of first appearance) and :data:`COMBINED`."""
+    tracks: dict[str, list[RaceFigures]] = {}
+    for race in races:
+        tracks.setdefault(race.track, []).append(race)
+    if COMBINED in tracks:
+        raise ValueError(f"a track may not be called {COMBINED!r}")
+    per_track = {name: track_stats(group) for name, group in tracks.items()}
+    return TournamentStats({**per_track, COMBINED: track_stats(races)})

@@ -1,0 +1,270 @@
+"""Round-robin tournaments: every pair of agents, on every track, ``races_per_pair`` races each, start lanes
+alternating between races (lanes 2 and 3, as the original), every race seeded from the tournament's seed.
+
+Races run in worker processes (``backend="process"``, the default; ``forkserver`` start method, safe with
+threads and numba), in this process (``"inline"``), or as tasks on a Ray cluster (``"ray"``,
+``ray.init(address=...)``; the optional ``tournament`` extra). Each finished race goes to a :class:`RaceStore` as
+it finishes, in this process (one writer); a tournament run again with the same id and store skips the races
+the store already holds, so an interrupted tournament resumes and ends with the same results as one run straight
+through (every race depends on its job only).
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Generator, Mapping, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import asdict, dataclass, field
+from itertools import combinations
+from typing import Any, Literal, Protocol
+
+import numpy as np
+
+from arena.race import FinishedRace, RaceJob, run_job
+from arena.records import RaceFigures
+from controllers.race import load_any_track
+from controllers.registry import controller_names
+
+Backend = Literal["process", "inline", "ray"]
+BACKENDS: tuple[Backend, ...] = ("process", "inline", "ray")
+START_LANES = (2, 3)  # the original's two start lanes, swapped every other race
+
+
+@dataclass(frozen=True)
+class TournamentSpec:
+    """What a tournament races: agents (registry names), tracks, races per pair and track, and the race settings."""
+
+    agents: tuple[str, ...]
+    tracks: tuple[str, ...] = ("oval", "complex")
+    races_per_pair: int = 50
+    seed: int = 0
+    laps: int | None = None  # None: each track's
+    time_limit: float | None = None  # [s] None: the rules' limit
+    kart_preset: str = "paper"
+    plan_latency: float = 0.1  # [s]
+    # agents without a planner given the MCTS planner in the background for their Δr / Δv (as the paper's E2E)
+    background_planners: tuple[str, ...] = ("e2e",)
+
+    def problems(self) -> dict[str, str]:
+        """What is wrong with this spec, by field (empty: nothing)."""
+        found: dict[str, str] = {}
+        known = controller_names()
+        unknown = [a for a in self.agents if a not in known]
+        if unknown:
+            found["agents"] = f"unknown agents {unknown}; known: {known}"
+        elif len(set(self.agents)) != len(self.agents) or len(self.agents) < 2:
+            found["agents"] = f"give two or more different agents, got {list(self.agents)}"
+        bad_tracks = []
+        for track in self.tracks:
+            try:
+                load_any_track(track)
+            except (OSError, KeyError, ValueError):
+                bad_tracks.append(track)
+        if bad_tracks or not self.tracks:
+            found["tracks"] = f"unknown tracks {bad_tracks}" if bad_tracks else "give one or more tracks"
+        if self.races_per_pair < 1:
+            found["races_per_pair"] = f"races_per_pair must be >= 1, got {self.races_per_pair}"
+        return found
+
+    def validate(self) -> TournamentSpec:
+        """This spec, or ``ValueError`` naming every problem."""
+        problems = self.problems()
+        if problems:
+            raise ValueError("; ".join(f"{name}: {message}" for name, message in problems.items()))
+        return self
+
+    def pairs(self) -> list[tuple[str, str]]:
+        """Every pair of agents once, in the agents' order."""
+        return list(combinations(self.agents, 2))
+
+    def jobs(self) -> list[RaceJob]:
+        """The schedule: per track, per pair, ``races_per_pair`` races; even races put the pair's first agent in
+        lane 2, odd ones in lane 3. Race seeds come from ``numpy.random.SeedSequence([seed, index])``."""
+        jobs: list[RaceJob] = []
+        for track in self.tracks:
+            for a, b in self.pairs():
+                for r in range(self.races_per_pair):
+                    index = len(jobs)
+                    lanes = START_LANES if r % 2 == 0 else START_LANES[::-1]
+                    seed = int(np.random.SeedSequence([self.seed, index]).generate_state(1)[0] % 2**31)
+                    job = RaceJob(
+                        index,
+                        track,
+                        (a, b),
+                        seed,
+                        lanes,
+                        self.laps,
+                        self.time_limit,
+                        self.kart_preset,
+                        self.plan_latency,
+                        tuple(agent for agent in (a, b) if agent in self.background_planners),
+                    )
+                    jobs.append(job)
+        return jobs
+
+    @property
+    def total(self) -> int:
+        """How many races the tournament has."""
+        return len(self.tracks) * len(self.pairs()) * self.races_per_pair
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON-able dict (stored with the tournament)."""
+        data = asdict(self)
+        return {
+            **data,
+            "agents": list(self.agents),
+            "tracks": list(self.tracks),
+            "background_planners": list(self.background_planners),
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> TournamentSpec:
+        """Read back :meth:`to_json`."""
+        values = {**data, "agents": tuple(data["agents"]), "tracks": tuple(data["tracks"])}
+        if "background_planners" in values:
+            values["background_planners"] = tuple(values["background_planners"])
+        return cls(**values)
+
+
+class RaceStore(Protocol):
+    """Where a tournament's finished races go (the server's database: ``server.tournament_db``)."""
+
+    def finished_indices(self, tournament_id: str) -> set[int]:
+        """Schedule indices of the races stored for ``tournament_id``."""
+
+    def save(self, tournament_id: str, race: FinishedRace) -> None:
+        """Store one finished race (atomically: after a crash it is there whole or not at all)."""
+
+
+@dataclass
+class MemoryStore:
+    """A :class:`RaceStore` in memory (tests, benchmarks)."""
+
+    races: dict[str, dict[int, FinishedRace]] = field(default_factory=dict)
+
+    def finished_indices(self, tournament_id: str) -> set[int]:
+        """Indices stored for the tournament."""
+        return set(self.races.get(tournament_id, {}))
+
+    def save(self, tournament_id: str, race: FinishedRace) -> None:
+        """Keep the race."""
+        self.races.setdefault(tournament_id, {})[race.job.index] = race
+
+    def figures(self, tournament_id: str) -> list[RaceFigures]:
+        """The stored races' figures in schedule order."""
+        stored = self.races.get(tournament_id, {})
+        return [stored[i].figures() for i in sorted(stored)]
+
+
+@dataclass(frozen=True)
+class Progress:
+    """Where a tournament stands after a race: races done (stored, this run's and earlier runs') of ``total``."""
+
+    done: int
+    total: int
+    race: FinishedRace | None  # the race just finished (None: the report before the first race)
+
+
+ProgressHook = Callable[[Progress], None]
+StopCheck = Callable[[], bool]
+
+
+def default_workers() -> int:
+    """Worker processes by default: one per CPU this process may use."""
+    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
+
+
+def run_tournament(
+    spec: TournamentSpec,
+    store: RaceStore,
+    tournament_id: str,
+    *,
+    backend: Backend = "process",
+    workers: int | None = None,
+    ray_address: str | None = None,
+    record: bool = True,
+    on_progress: ProgressHook | None = None,
+    should_stop: StopCheck | None = None,
+) -> int:
+    """Run the races of ``spec`` that ``store`` does not hold yet; store each as it finishes. Returns the races
+    stored by this call. ``should_stop()`` is asked after every race: true ends the run (races in flight are
+    abandoned, not stored; a later run re-runs them)."""
+    spec.validate()
+    done = store.finished_indices(tournament_id)
+    pending = [job for job in spec.jobs() if job.index not in done]
+    stored = 0
+    if on_progress is not None:
+        on_progress(Progress(len(done), spec.total, None))
+    races = _backend_races(backend, pending, workers or default_workers(), ray_address, record)
+    try:
+        for race in races:
+            store.save(tournament_id, race)
+            stored += 1
+            if on_progress is not None:
+                on_progress(Progress(len(done) + stored, spec.total, race))
+            if should_stop is not None and should_stop():
+                break
+    finally:
+        races.close()
+    return stored
+
+
+def _backend_races(
+    backend: Backend, jobs: Sequence[RaceJob], workers: int, ray_address: str | None, record: bool
+) -> Generator[FinishedRace, None, None]:
+    if backend == "inline":
+        return (run_job(job, record) for job in jobs)
+    if backend == "process":
+        return _process_races(jobs, workers, record)
+    if backend == "ray":
+        return _ray_races(jobs, ray_address, record)
+    raise ValueError(f"unknown backend {backend!r}; known: {BACKENDS}")
+
+
+def _start_method() -> str:
+    return "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
+
+
+def _process_races(jobs: Sequence[RaceJob], workers: int, record: bool) -> Generator[FinishedRace, None, None]:
+    """Races from a process pool, as they finish; at most ``2 * workers`` submitted at a time (a stop leaves
+    little work behind)."""
+    if not jobs:
+        return
+    context = multiprocessing.get_context(_start_method())
+    queue = list(reversed(jobs))
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=context)
+    running: set[Future[FinishedRace]] = set()
+    try:
+        while queue or running:
+            while queue and len(running) < 2 * workers:
+                running.add(pool.submit(run_job, queue.pop(), record))
+            finished, running = wait(running, return_when=FIRST_COMPLETED)
+            for future in sorted(finished, key=lambda f: f.result().job.index):
+                yield future.result()
+    finally:
+        # stopped early: drop what has not started, do not wait for the races in flight
+        pool.shutdown(wait=not running, cancel_futures=True)
+
+
+def _ray_races(jobs: Sequence[RaceJob], address: str | None, record: bool) -> Generator[FinishedRace, None, None]:
+    """Races as Ray tasks (one CPU each), as they finish. Connects to ``address`` (``None``: a local Ray, or the
+    cluster of ``RAY_ADDRESS``) unless Ray is already initialised."""
+    try:
+        import ray
+    except ImportError as exc:
+        raise RuntimeError("the ray backend needs Ray: pip install 'headtohead-karting[tournament]'") from exc
+    if not jobs:
+        return
+    if not ray.is_initialized():
+        ray.init(address=address, ignore_reinit_error=True, log_to_driver=False)
+    remote: Any = ray.remote(num_cpus=1)(run_job)
+    running = [remote.remote(job, record) for job in jobs]
+    try:
+        while running:
+            ready, running = ray.wait(running, num_returns=1)
+            for ref in ready:
+                yield ray.get(ref)
+    finally:
+        for ref in running:
+            ray.cancel(ref, force=True)

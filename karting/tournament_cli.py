@@ -1,0 +1,208 @@
+"""``karting tournament``: run a round robin (resumable), print the statistics (of a stored tournament or of the
+original implementation's logs) and write a report.
+
+    karting tournament run --agents mcts-lqng,fixed-lqng --tracks oval,complex --races-per-pair 50 --id grid
+    karting tournament stats --id grid --json
+    karting tournament stats --original-logs ../shared/spec/original_logs --json
+    karting tournament report grid --out results/tournaments/grid
+"""
+
+from __future__ import annotations
+
+import json
+import uuid
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, cast
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.table import Table
+
+if TYPE_CHECKING:
+    from arena.stats import TournamentStats
+    from server.tournament_db import TournamentDatabase
+
+app = typer.Typer(help="Round-robin tournaments: run, statistics, reports.", no_args_is_help=True)
+console = Console()
+
+DbOption = Annotated[str, typer.Option(help="SQLite file or database URL (the server's: ./karting.db)")]
+
+
+def _names(text: str) -> tuple[str, ...]:
+    return tuple(n.strip() for n in text.split(",") if n.strip())
+
+
+def open_tournaments(db: str) -> TournamentDatabase:
+    """The tournament store in the database ``db`` (a SQLite file or a URL)."""
+    from server.db import RaceDatabase
+    from server.tournament_db import TournamentDatabase
+
+    return TournamentDatabase(RaceDatabase(db if "://" in db else f"sqlite:///{db}"))
+
+
+@app.command()
+def run(
+    agents: Annotated[str, typer.Option(help="registered controllers, comma separated")] = (
+        "mcts-rl,e2e,fixed-rl,mcts-lqng,fixed-lqng"
+    ),
+    tracks: Annotated[str, typer.Option(help="tracks, comma separated")] = "oval,complex",
+    races_per_pair: Annotated[int, typer.Option(min=1, help="races per pair and track")] = 50,
+    seed: Annotated[int, typer.Option(help="the tournament's seed (every race's seed derives from it)")] = 0,
+    laps: Annotated[int | None, typer.Option(min=1, help="laps (default: each track's)")] = None,
+    time_limit: Annotated[float | None, typer.Option(min=1.0, help="[s] race time limit (default: the rules')")] = None,
+    kart: Annotated[str, typer.Option(help="kart preset: paper or original")] = "paper",
+    backend: Annotated[str, typer.Option(help="process (worker processes), inline or ray")] = "process",
+    workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per CPU)")] = None,
+    ray_address: Annotated[str | None, typer.Option(help="Ray cluster address (default: local Ray)")] = None,
+    tournament_id: Annotated[
+        str | None, typer.Option("--id", help="tournament id; an existing id with the same settings resumes")
+    ] = None,
+    db: DbOption = "karting.db",
+    replays: Annotated[bool, typer.Option(help="store every race's replay")] = True,
+) -> None:
+    """Run a round-robin tournament, storing every race as it finishes (run it again with the same --id to
+    resume an interrupted one)."""
+    from arena.tournament import BACKENDS, Backend, TournamentSpec, run_tournament
+    from arena.tournament import Progress as RaceProgress
+    from server.tournament_db import TournamentStatus
+
+    spec = TournamentSpec(_names(agents), _names(tracks), races_per_pair, seed, laps, time_limit, kart)
+    problems = spec.problems()
+    if backend not in BACKENDS:
+        problems["backend"] = f"unknown backend {backend!r}; known: {list(BACKENDS)}"
+    if problems:
+        for name, message in problems.items():
+            console.print(f"[red]error:[/red] {name}: {message}")
+        raise typer.Exit(2)
+    store = open_tournaments(db)
+    tid = tournament_id or f"t{uuid.uuid4().hex[:10]}"
+    try:
+        stored = store.create(tid, spec)
+    except ValueError as exc:
+        console.print(f"[red]error:[/red] {exc}")
+        raise typer.Exit(2) from None
+    console.print(f"tournament [bold]{tid}[/bold]: {spec.total} races, {stored.done} stored already ({db})")
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, console=console) as bar:
+        task = bar.add_task("races", total=spec.total)
+
+        def show(progress: RaceProgress) -> None:
+            last = progress.race
+            text = "races" if last is None else f"races (last: {last.job.track} {' vs '.join(last.job.agents)})"
+            bar.update(task, completed=progress.done, description=text)
+
+        try:
+            run_tournament(
+                spec,
+                store,
+                tid,
+                backend=cast(Backend, backend),  # checked against BACKENDS above
+                workers=workers,
+                ray_address=ray_address,
+                record=replays,
+                on_progress=show,
+            )
+        except KeyboardInterrupt:
+            store.set_status(tid, TournamentStatus.STOPPED)
+            console.print(f"stopped: run again with --id {tid} to resume")
+            raise typer.Exit(130) from None
+        except Exception as exc:
+            store.set_status(tid, TournamentStatus.FAILED, repr(exc)[:2000])
+            raise
+    store.set_status(tid, TournamentStatus.FINISHED)
+    _print_wins(_stats_of(store, tid))
+    console.print(f"done: karting tournament report {tid} --db {db}")
+
+
+def _stats_of(store: TournamentDatabase, tournament_id: str) -> TournamentStats:
+    from arena.stats import tournament_stats
+
+    if store.get(tournament_id) is None:
+        console.print(f"[red]error:[/red] no tournament {tournament_id!r}")
+        raise typer.Exit(2)
+    races = store.figures(tournament_id)
+    if not races:
+        console.print(f"[red]error:[/red] tournament {tournament_id!r} has no finished race yet")
+        raise typer.Exit(2)
+    return tournament_stats(races)
+
+
+def _print_wins(stats: TournamentStats) -> None:
+    """Each track's win table and a compact safety table: mean (std) per metric, races finished of all."""
+    from arena.report import safety_rows, win_rows
+    from arena.stats import COMBINED
+
+    for track, table in stats.tracks.items():
+        if track == COMBINED and len(stats.tracks) == 2:
+            continue  # one track: the same tables again
+        wins = win_rows(table)
+        safety = [
+            [row[0], f"{row[1]} ({row[2]})", f"{row[3]} ({row[4]})", f"{row[5]} ({row[6]})", f"{row[8]}/{row[9]}"]
+            for row in safety_rows(table)[1:]
+        ]
+        rule = table.agent_stats[table.agents[0]].illegal_lane_changes.rule
+        header = ["agent", "collisions at fault", f"illegal lane changes ({rule})", "safety score", "finished"]
+        for title, rows in ((f"wins ({track})", wins), (f"safety ({track}): mean (std)", [header, *safety])):
+            shown = Table(title=title)
+            for column in rows[0]:
+                shown.add_column(column, justify="right")
+            for row in rows[1:]:
+                shown.add_row(*row)
+            console.print(shown)
+
+
+@app.command()
+def stats(
+    tournament_id: Annotated[str | None, typer.Option("--id", help="a stored tournament")] = None,
+    original_logs: Annotated[
+        Path | None, typer.Option(help="the original implementation's race logs (a folder of A_vs_B_TrackN.txt)")
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="print the stats JSON (see the README)")] = False,
+    db: DbOption = "karting.db",
+) -> None:
+    """The paper's statistics of a stored tournament, or of the original's released logs."""
+    from arena.original_logs import read_original_logs
+    from arena.stats import tournament_stats
+
+    if (tournament_id is None) == (original_logs is None):
+        console.print("[red]error:[/red] give exactly one of --id and --original-logs")
+        raise typer.Exit(2)
+    if original_logs is not None:
+        try:
+            result = tournament_stats(read_original_logs(original_logs))
+        except (OSError, ValueError) as exc:
+            console.print(f"[red]error:[/red] {exc}")
+            raise typer.Exit(2) from None
+    else:
+        assert tournament_id is not None
+        result = _stats_of(open_tournaments(db), tournament_id)
+    if as_json:
+        print(json.dumps(result.to_json()))
+    else:
+        _print_wins(result)
+
+
+@app.command()
+def report(
+    tournament_id: Annotated[str, typer.Argument(help="a stored tournament")],
+    out: Annotated[Path | None, typer.Option(help="output folder (default results/tournaments/ID)")] = None,
+    db: DbOption = "karting.db",
+) -> None:
+    """Write a tournament's report: Markdown, CSV and JSON tables like the paper's, and PNG plots."""
+    from arena.report import write_report
+
+    store = open_tournaments(db)
+    result = _stats_of(store, tournament_id)
+    stored = store.get(tournament_id)
+    assert stored is not None
+    folder = out or Path("results") / "tournaments" / tournament_id
+    title = f"Tournament {tournament_id} ({stored.done}/{stored.total} races, {stored.status.value})"
+    files = write_report(result, store.figures(tournament_id), folder, title)
+    console.print(f"wrote {len(files)} files to {folder}")

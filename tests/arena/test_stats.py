@@ -1,0 +1,120 @@
+"""The statistics on small hand-computed cases: the win rule with DNFs, per-agent figures over all races (Δr and
+Δv over finished ones), both lane-change counting rules, and the tests against scipy called directly."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats as scipy_stats
+
+from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures, winner_index
+from arena.stats import COMBINED, MeanStd, binomial_win_test, t_test, tournament_stats
+
+
+def kart(
+    agent: str,
+    time: float | None,
+    faults: int = 0,
+    per_step: int = 0,
+    checkpoint: int = 0,
+    delta_r: float | None = None,
+) -> KartFigures:
+    return KartFigures(
+        agent=agent,
+        finished=time is not None,
+        total_time=time,
+        collisions_at_fault=faults,
+        illegal_lane_changes={PER_STEP: per_step, CHECKPOINT: checkpoint},
+        safety_rule=PER_STEP,
+        passes=1,
+        delta_r=delta_r,
+        delta_v=None if delta_r is None else 2 * delta_r,
+    )
+
+
+def race(track: str, *karts: KartFigures) -> RaceFigures:
+    return RaceFigures(track=track, karts=karts)
+
+
+def test_only_a_finisher_can_win_and_the_faster_finisher_wins() -> None:
+    assert winner_index((kart("a", 80.0), kart("b", 79.0))) == 1
+    assert winner_index((kart("a", 80.0), kart("b", None))) == 0
+    assert winner_index((kart("a", None), kart("b", 10.0))) == 1  # a DNF never wins, however far it got
+    assert winner_index((kart("a", None), kart("b", None))) is None
+
+
+def test_win_tables_count_per_track_and_combined_and_skip_races_nobody_won() -> None:
+    races = [
+        race("oval", kart("a", 80.0), kart("b", 81.0)),
+        race("oval", kart("b", 79.0), kart("a", None)),
+        race("oval", kart("a", None), kart("b", None)),
+        race("complex", kart("a", 90.0), kart("b", None)),
+    ]
+    stats = tournament_stats(races)
+    assert list(stats.tracks) == ["oval", "complex", COMBINED]
+    assert stats.tracks["oval"].wins == {"a": {"b": 1}, "b": {"a": 1}}
+    assert stats.tracks["complex"].wins == {"a": {"b": 1}, "b": {"a": 0}}
+    assert stats.tracks[COMBINED].wins == {"a": {"b": 2}, "b": {"a": 1}}
+    oval = stats.tracks["oval"].agent_stats
+    assert (oval["a"].races, oval["a"].finished, oval["b"].finished) == (3, 1, 2)
+
+
+def test_safety_figures_are_over_all_races_and_plan_figures_over_finished_ones() -> None:
+    races = [
+        race("oval", kart("a", 80.0, faults=1, per_step=2, checkpoint=1, delta_r=1.0), kart("b", 81.0)),
+        race("oval", kart("a", None, faults=3, per_step=0, checkpoint=0, delta_r=9.0), kart("b", 81.0)),
+        race("oval", kart("a", 70.0, faults=0, per_step=4, checkpoint=2, delta_r=2.0), kart("b", 81.0)),
+    ]
+    a = tournament_stats(races).tracks["oval"].agent_stats["a"]
+    assert a.collisions_at_fault == MeanStd(4 / 3, float(np.std([1, 3, 0])), 3)
+    assert a.illegal_lane_changes.rule == PER_STEP
+    assert a.illegal_lane_changes.headline.mean == 2.0
+    assert a.illegal_lane_changes.by_rule[CHECKPOINT].mean == 1.0
+    assert a.safety_score.mean == pytest.approx((3 + 3 + 4) / 3)
+    assert a.safety_score.std == pytest.approx(np.std([3, 3, 4]))  # population deviation, as the paper
+    assert a.delta_r is not None and a.delta_r.mean == 1.5 and a.delta_r.n == 2  # the DNF's 9.0 left out
+    assert a.delta_v is not None and a.delta_v.mean == 3.0
+    assert a.passes is not None and a.passes.mean == 1.0
+    entry = tournament_stats(races).to_json()["tracks"]["oval"]["safety"]["a"]
+    assert entry["illegal_lane_changes"] == {
+        "mean": 2.0,
+        "std": pytest.approx(np.std([2, 0, 4])),
+        "rule": PER_STEP,
+        PER_STEP: {"mean": 2.0, "std": pytest.approx(np.std([2, 0, 4]))},
+        CHECKPOINT: {"mean": 1.0, "std": pytest.approx(np.std([1, 0, 2]))},
+    }
+
+
+def test_the_win_test_is_scipys_binomial_test_among_decided_races() -> None:
+    test = binomial_win_test("a", "b", 30, 15)
+    assert test.p_value == scipy_stats.binomtest(30, 45, 0.5).pvalue and test.significant
+    assert not binomial_win_test("a", "b", 24, 26).significant
+    assert binomial_win_test("a", "b", 0, 0).p_value == 1.0
+
+
+def test_the_metric_test_is_scipys_pooled_two_sided_t_test() -> None:
+    rng = np.random.default_rng(0)
+    x, y = rng.poisson(1.0, 60).astype(float), rng.poisson(1.6, 50).astype(float)
+    test = t_test("a", "b", list(x), list(y))
+    assert test is not None
+    expected = scipy_stats.ttest_ind(x, y, equal_var=True)
+    assert (test.statistic, test.p_value) == (pytest.approx(expected.statistic), pytest.approx(expected.pvalue))
+    assert t_test("a", "b", [1.0], [1.0, 2.0]) is None
+    same = t_test("a", "b", [0.0, 0.0], [0.0, 0.0, 0.0])
+    assert same is not None and same.p_value == 1.0 and not same.significant
+    apart = t_test("a", "b", [1.0, 1.0], [0.0, 0.0])
+    assert apart is not None and apart.significant and math.isinf(apart.statistic)
+
+
+def test_an_agent_is_marked_only_when_it_differs_from_every_other_agent() -> None:
+    races = []
+    for i in range(30):
+        races.append(race("oval", kart("low", 80.0, faults=0), kart("mid", 81.0, faults=2 + i % 2)))
+        races.append(race("oval", kart("high", 80.0, faults=2 + (i + 1) % 2), kart("low", 81.0, faults=0)))
+    table = tournament_stats(races).tracks["oval"]
+    assert table.marked("collisions_at_fault", "low")
+    assert not table.marked("collisions_at_fault", "mid") and not table.marked("collisions_at_fault", "high")
+    marks = table.to_json()["tests"]["marks"]["metrics"]
+    assert marks["low"]["collisions_at_fault"] and not marks["mid"]["collisions_at_fault"]
