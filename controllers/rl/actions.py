@@ -4,8 +4,8 @@ Stable-Baselines3's PPO has no hybrid (continuous + discrete) action space, so a
 ``[steer, pedal]`` in [-1, 1]. ``pedal`` picks one of the original's three branches by thirds (brake below
 -1/3, accelerate above +1/3, coast between). The branch becomes a throttle through the kart's own longitudinal
 model (:meth:`sim_core.params.KartParams.throttle_for_acceleration`): accelerate asks for the kart's full
-acceleration at its speed, coast for the coasting drag (throttle 0), brake for its full braking, which at
-standstill is a hold, not reverse.
+acceleration at its speed, coast for the coasting drag (throttle 0), brake for its full braking; from standstill
+a held brake reverses (throttle -1), as the original's ArcadeKart.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import ndtr
 
+from sim_core.kart import STANDSTILL
 from sim_core.params import KartParams
 
 BRAKE, COAST, ACCELERATE = 0, 1, 2
@@ -58,5 +59,9 @@ def world_actions(kart: KartParams, speed: np.ndarray, action: np.ndarray) -> tu
     branch = pedal_branch(a[..., 1])
     out = np.empty(a.shape)
     out[..., 0] = np.clip(a[..., 0], -1.0, 1.0)
-    out[..., 1] = kart.throttle_for_acceleration(speed, branch_acceleration(kart, speed, branch))
+    throttle = kart.throttle_for_acceleration(speed, branch_acceleration(kart, speed, branch))
+    # a held brake from standstill (or while rolling back) reverses, as the original's ArcadeKart: the only way
+    # off a wall the kart has stopped against
+    reversing = (branch == BRAKE) & (np.asarray(speed, dtype=float) <= STANDSTILL)
+    out[..., 1] = np.where(reversing, -1.0, throttle)
     return out, branch
