@@ -4,6 +4,8 @@
   ``../shared/spec/tracks/*.json`` (centres, headings, straight/curve pieces, hand-set racing lanes).
 * ``train-oval-small`` and ``train-oval-large``: two training ovals of different sizes laid from pieces
   (the paper trains its learned agents on two oval sizes).
+* ``train-hairpins``: a training circuit with tight corners both ways (ours: the RL agents met complex's
+  hairpins untrained and stuck against the outside wall).
 
 Run from the repo root: ``.venv/bin/python scripts/make_tracks.py [--spec-dir ../shared/spec/tracks]``.
 """
@@ -16,7 +18,7 @@ import math
 from pathlib import Path
 
 from sim_core.track import Checkpoint, Section, build_track
-from sim_core.track_builder import chain_track, oval_pieces
+from sim_core.track_builder import chain_track, hairpin_pieces, oval_pieces
 from sim_core.track_io import TRACKS_DIR, save_track
 
 DESCRIPTIONS = {
@@ -92,7 +94,15 @@ def main() -> None:
         lane_change_limit=4,
         description="Training oval, large: 80 m and 30 m straights, inside radius 20 m.",
     )
-    for track in (small, large):
+    hairpins = chain_track(
+        "train-hairpins",
+        hairpin_pieces(),
+        laps=1,
+        lane_change_limit=4,
+        description="Training circuit with a notch: corners of inside radius 5, 7 and 1 m, both ways (not in the "
+        "paper's training set: its ovals have no corner under 10 m, complex has 1-5 m hairpins).",
+    )
+    for track in (small, large, hairpins):
         save_track(track, TRACKS_DIR / f"{track.name}.json")
     print("wrote", sorted(p.name for p in TRACKS_DIR.glob("*.json")))
 

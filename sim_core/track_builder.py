@@ -117,3 +117,43 @@ def oval_pieces(
         + straight_run(short_straight)
         + corner()
     )
+
+
+def hairpin_pieces(outer_radius: float = 5.0, notch_radius: float = 1.0, inner_radius: float = 7.0) -> list[Straight | Curve]:
+    """A counter-clockwise circuit with a notch in one side: six left and two right 90 deg corners of inside
+    radii ``outer_radius``, ``inner_radius`` and ``notch_radius`` [m] (tight corners both ways, as ``complex``
+    has and the ovals have not). Straights are laid in 10-12 m pieces; the last two straights' lengths close it.
+
+    The racing lane takes the inside at each corner's first half (lane 1 turning left, the last lane turning
+    right) and lane 2 or 3 on its exit; straights leave the lane free. Laid for a 10 m wide track.
+    """
+
+    def corner(radius: float, left: bool) -> list[Straight | Curve]:
+        return [Curve(radius, 45.0, left, 1 if left else 4), Curve(radius, 45.0, left, 2 if left else 3)]
+
+    def straight(length: float, pieces: int) -> list[Straight | Curve]:
+        return [Straight(length / pieces) for _ in range(pieces)]
+
+    side, top, notch_depth, notch_width = 30.0, 20.0, 20.0, 20.0
+    half = 5.0  # centre-line radius - inside radius, for the 10 m width of the built-in tracks
+    # the bottom spans the top side: two top straights, the notch, and the sideways reach of the notch's four
+    # corners (the outer corners' reach cancels between top and bottom)
+    bottom = 2 * top + notch_width + 2 * (inner_radius + half) + 2 * (notch_radius + half)
+    return (
+        straight(side, 3)
+        + corner(outer_radius, True)
+        + straight(top, 2)
+        + corner(inner_radius, True)
+        + straight(notch_depth, 2)
+        + corner(notch_radius, False)
+        + straight(notch_width, 2)
+        + corner(notch_radius, False)
+        + straight(notch_depth, 2)
+        + corner(inner_radius, True)
+        + straight(top, 2)
+        + corner(outer_radius, True)
+        + straight(side, 3)
+        + corner(outer_radius, True)
+        + straight(bottom, 8)
+        + corner(outer_radius, True)
+    )

@@ -39,7 +39,9 @@ class MCTSRLParams:
     iterations: int = parameter(2000, "MCTS iterations per plan", minimum=1, maximum=20_000)
     horizon: int = parameter(8, "checkpoints the tactical game looks ahead", minimum=1, maximum=16)
     planner_rate_hz: float = parameter(1.0, "re-plans per second", unit="Hz", minimum=0.1, maximum=10.0)
-    deterministic: bool = parameter(False, "act with the policy's mean instead of sampling its Gaussian (seeded)")
+    deterministic: bool = parameter(
+        True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
+    )
 
 
 @dataclass(frozen=True)
@@ -49,14 +51,18 @@ class FixedRLParams:
     line_margin_m: float = parameter(
         1.0, "how far the planner's racing line keeps inside the walls", unit="m", minimum=0.5, maximum=3.0
     )
-    deterministic: bool = parameter(False, "act with the policy's mean instead of sampling its Gaussian (seeded)")
+    deterministic: bool = parameter(
+        True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
+    )
 
 
 @dataclass(frozen=True)
 class E2EParams:
     """Public parameters of ``e2e`` (the policy is the whole driver)."""
 
-    deterministic: bool = parameter(False, "act with the policy's mean instead of sampling its Gaussian (seeded)")
+    deterministic: bool = parameter(
+        True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
+    )
 
 
 def build_mcts_rl(params: MCTSRLParams) -> Controller:
@@ -83,7 +89,7 @@ class E2EController:
     name = "e2e"
     rate_hz = RL_RATE_HZ
 
-    def __init__(self, folder: str | None = None, deterministic: bool = False) -> None:
+    def __init__(self, folder: str | None = None, deterministic: bool = True) -> None:
         self.tracker = RLTracker("e2e", folder, deterministic)
 
     def reset(self, context: RaceContext) -> None:

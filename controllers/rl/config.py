@@ -18,6 +18,10 @@ TRAINING_TRACKS: tuple[str, ...] = (
     "train-oval-large",
     "train-oval-small-reversed",
     "train-oval-large-reversed",
+    # not in the original's training set: without a corner under 10 m the agents ran wide into complex's
+    # 1-5 m hairpins and stuck against the wall (results/rl/README.md)
+    "train-hairpins",
+    "train-hairpins-reversed",
 )
 
 DECISION_STEPS = 2  # physics steps per decision (the action is held in between): 25 Hz

@@ -63,13 +63,13 @@ class RLTracker:
     Fixed-RL the plan's lanes at top speed, E2E the checkpoint centres at top speed. Checkpoints a plan does
     not cover fall back to the racing lane (planned agents) or the centre (E2E).
 
-    It samples its actions from the policy's Gaussian, as PPO's rollouts and ML-Agents' inference do, with a
-    generator seeded by the race (``context.seed``, ``context.ego``), so a seeded race is repeatable;
-    ``deterministic`` takes the Gaussian's mean instead (the interim weights drive worse that way: in some
-    spawns the mean pedal stays in the coasting third and the kart never starts).
+    By default (``deterministic``) it decides by the policy's Gaussian: the mean steer and the pedal branch the
+    Gaussian most likely picks (:meth:`controllers.rl.policy.Policy.act`). Otherwise it samples the Gaussian, as
+    PPO's rollouts do, with a generator seeded by the race (``context.seed``, ``context.ego``), so a seeded race
+    is repeatable either way. Sampling drives slower: the steering noise costs speed through the tyres' limit.
     """
 
-    def __init__(self, agent: AgentKind, folder: str | None = None, deterministic: bool = False) -> None:
+    def __init__(self, agent: AgentKind, folder: str | None = None, deterministic: bool = True) -> None:
         self.agent = agent
         self.folder = folder
         self.deterministic = deterministic
