@@ -85,7 +85,14 @@ def _race(args: tuple[str, str, str, str, bool, int]) -> dict:
     }
 
 
-def evaluate(variants: list[dict], out: Path, tracks: list[str], races: int, workers: int) -> dict[str, dict]:
+def evaluate(
+    variants: list[dict],
+    out: Path,
+    tracks: list[str],
+    races: int,
+    workers: int,
+    modes: tuple[bool, ...] = (True, False),
+) -> dict[str, dict]:
     """Race every trained variant; a summary per variant and mode."""
     jobs = []
     for v in variants:
@@ -94,7 +101,7 @@ def evaluate(variants: list[dict], out: Path, tracks: list[str], races: int, wor
             continue
         export_policy(folder)  # before the workers start: they only read it
         for track in tracks:
-            for det in (True, False):
+            for det in modes:
                 for seed in range(races):
                     jobs.append((v["name"], (folder, v["agent"], track, "fixed-lqng", det, seed)))
     with ProcessPoolExecutor(workers) as pool:
@@ -129,11 +136,13 @@ def main() -> None:
     parser.add_argument("--eval-races", type=int, default=2)
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 2)
     parser.add_argument("--skip-training", action="store_true")
+    parser.add_argument("--modes", default="mean,sample", help="mean (most likely decision), sample, or both")
     args = parser.parse_args()
     variants = json.loads(args.variants.read_text())
     args.out.mkdir(parents=True, exist_ok=True)
     walls = {} if args.skip_training else train_all(variants, args.out, args.steps, args.races)
-    summary = evaluate(variants, args.out, args.eval_tracks.split(","), args.eval_races, args.workers)
+    modes = tuple(m == "mean" for m in args.modes.split(","))
+    summary = evaluate(variants, args.out, args.eval_tracks.split(","), args.eval_races, args.workers, modes)
     for v in variants:
         log = args.out / v["name"] / "training_log.csv"
         last = log.read_text().strip().splitlines()[-1] if log.exists() else ""

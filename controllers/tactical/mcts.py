@@ -39,9 +39,12 @@ def _fastest_move(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins:
     for lane in range(n_lanes):
         if only >= 0 and lane != only:
             continue
+        _, v_max, entry, gate = rules.lane_gate(tb, state, p, lane)
+        if not gate:
+            continue
         # a higher arrival speed never arrives later, so the first legal bin from the top is this lane's fastest
         for vbin in range(bins - 1, -1, -1):
-            arrival, _, ok = rules.move_outcome(tb, state, p, lane, vbin)
+            arrival, ok = rules.bin_arrival(tb, state, p, lane, vbin, v_max, entry)
             if ok:
                 key = arrival * 8 + abs(lane - state[p, rules.LANE])
                 if key < best_key:

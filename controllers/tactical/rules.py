@@ -134,14 +134,10 @@ def _collides(tb: GameTables, state: np.ndarray, p: int, lane: int, arrival: int
 
 
 @njit(cache=True)
-def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int) -> tuple[int, int, int]:
-    """(time after the move, new lane-change count, legal flag 0/1) of player ``p`` choosing ``lane``/``vbin``.
-
-    Illegal: over the lane-change limit on a straight, arriving above the cornering speed, boundary
-    conditions the 1-D motion cannot meet, arriving faster than the next section can brake from, and (when
-    pruning is on) arriving within the collision window of a player who already reached that checkpoint this
-    round, in its lane or on its other side (the paths cross).
-    """
+def lane_gate(tb: GameTables, state: np.ndarray, p: int, lane: int) -> tuple[int, float, float, int]:
+    """(new lane-change count, cornering speed [m/s], fastest arrival the next section can brake from [m/s],
+    legal flag 0/1) of player ``p`` heading for ``lane``: the part of :func:`move_outcome` that no speed bin
+    changes, computed once per lane by the callers that try every bin."""
     n = tb.straight.shape[0]
     c = state[p, CHECKPOINT] % n
     here = state[p, LANE]
@@ -150,17 +146,8 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
         state[p, LANE_COUNT], here, lane, tb.straight[c], tb.straight[(c + 1) % n], tb.lane_limit
     )
     if illegal:
-        return 0, 0, 0
-    radius = tb.corner_radius[c, here, lane]
-    v_max = corner_speed(tb, radius, state[p, WEAR])
-    if tb.bin_low[vbin] > v_max:
-        return 0, 0, 0
-    v0 = 0.5 * (tb.bin_low[state[p, BIN]] + tb.bin_high[state[p, BIN]])
-    v1 = min(0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin]), v_max)
-    # entering above the corner speed means braking down to it first; segment_time handles that
-    t = segment_time(tb.distance[c, here, lane], v0, v1, tb.accel, tb.brake, v_max)
-    if t < 0.0:
-        return 0, 0, 0
+        return 0, 0.0, 0.0, 0
+    v_max = corner_speed(tb, tb.corner_radius[c, here, lane], state[p, WEAR])
     # no arriving so fast that the next section cannot brake down to its own corner speed (a dead end)
     # (or into a lane from which no lane of the next section is reachable at the lowest speed bin)
     nxt = (c + 1) % n
@@ -172,9 +159,28 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
         if blocked or v_next < tb.bin_low[0]:
             continue
         entry = max(entry, math.sqrt(v_next * v_next + 2.0 * tb.brake * tb.distance[nxt, lane, j]))
+    return count, v_max, entry, 1
+
+
+@njit(cache=True)
+def bin_arrival(
+    tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int, v_max: float, entry: float
+) -> tuple[int, int]:
+    """(arrival time [0.01 s], legal flag 0/1) of player ``p`` choosing ``lane``/``vbin``, given the lane's
+    :func:`lane_gate` (``v_max``, ``entry``): the speed-bin half of :func:`move_outcome`."""
+    if tb.bin_low[vbin] > v_max:
+        return 0, 0
+    c = state[p, CHECKPOINT] % tb.straight.shape[0]
+    here = state[p, LANE]
+    v0 = 0.5 * (tb.bin_low[state[p, BIN]] + tb.bin_high[state[p, BIN]])
+    v1 = min(0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin]), v_max)
+    # entering above the corner speed means braking down to it first; segment_time handles that
+    t = segment_time(tb.distance[c, here, lane], v0, v1, tb.accel, tb.brake, v_max)
+    if t < 0.0:
+        return 0, 0
     # the next move starts from the bin's middle speed, whatever the arrival was capped to
     if 0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin]) > entry + 1e-9:
-        return 0, 0, 0
+        return 0, 0
     arrival = state[p, TIME] + int(t * 100.0 + tb.penalty[c, here, lane] + 0.5)
     # eq. (8) gen_coll_avoid as the paper discretises it: no arrival close in time in the same lane or across a path
     if tb.collision_window > 0:
@@ -184,9 +190,27 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
                 continue
             # the same lane, or swapping sides with the other on the way (side by side, the paths cross)
             if state[q, LANE] == lane or (here - state[q, PREV_LANE]) * (lane - state[q, LANE]) < 0:
-                return 0, 0, 0
+                return 0, 0
     # the same along the section, with a distance window of a kart length plus a margin
     if tb.collision_distance > 0.0 and _collides(tb, state, p, lane, arrival):
+        return 0, 0
+    return arrival, 1
+
+
+@njit(cache=True)
+def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int) -> tuple[int, int, int]:
+    """(time after the move, new lane-change count, legal flag 0/1) of player ``p`` choosing ``lane``/``vbin``.
+
+    Illegal: over the lane-change limit on a straight, arriving above the cornering speed, boundary
+    conditions the 1-D motion cannot meet, arriving faster than the next section can brake from, and (when
+    pruning is on) arriving within the collision window of a player who already reached that checkpoint this
+    round, in its lane or on its other side (the paths cross).
+    """
+    count, v_max, entry, ok = lane_gate(tb, state, p, lane)
+    if not ok:
+        return 0, 0, 0
+    arrival, ok = bin_arrival(tb, state, p, lane, vbin, v_max, entry)
+    if not ok:
         return 0, 0, 0
     return arrival, count, 1
 
@@ -200,8 +224,11 @@ def allowed_lane(tb: GameTables, state: np.ndarray, p: int) -> int:
     lane = tb.predicted_lane[(state[p, CHECKPOINT] + 1) % tb.straight.shape[0]]
     if lane < 0:
         return -1
+    _, v_max, entry, gate = lane_gate(tb, state, p, lane)
+    if not gate:
+        return -1
     for vbin in range(tb.bin_low.shape[0]):
-        _, _, ok = move_outcome(tb, state, p, lane, vbin)
+        _, ok = bin_arrival(tb, state, p, lane, vbin, v_max, entry)
         if ok:
             return lane
     return -1
@@ -221,8 +248,11 @@ def legal_moves(tb: GameTables, state: np.ndarray, p: int, out: np.ndarray) -> i
         for lane in range(lanes):
             if only >= 0 and lane != only:
                 continue
+            _, v_max, entry, gate = lane_gate(tb, state, p, lane)
+            if not gate:
+                continue
             for vbin in range(bins - 1, -1, -1):
-                arrival, _, ok = move_outcome(tb, state, p, lane, vbin)
+                arrival, ok = bin_arrival(tb, state, p, lane, vbin, v_max, entry)
                 if ok:
                     if arrival < best_arrival:
                         best, best_arrival = lane * bins + vbin, arrival
@@ -233,8 +263,11 @@ def legal_moves(tb: GameTables, state: np.ndarray, p: int, out: np.ndarray) -> i
         return 1
     k = 0
     for lane in range(lanes):
+        _, v_max, entry, gate = lane_gate(tb, state, p, lane)
+        if not gate:
+            continue
         for vbin in range(bins):
-            _, _, ok = move_outcome(tb, state, p, lane, vbin)
+            _, ok = bin_arrival(tb, state, p, lane, vbin, v_max, entry)
             if ok:
                 out[k] = lane * bins + vbin
                 k += 1
