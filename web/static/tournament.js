@@ -29,7 +29,7 @@ function specItems(spec) {
     ["seed", spec.seed],
     ["laps", spec.laps === null || spec.laps === undefined ? "each track's" : spec.laps],
     ["time limit", spec.time_limit === null || spec.time_limit === undefined ? "the rules'" : `${spec.time_limit} s`],
-    ["karts", spec.kart_preset],
+    ["kart preset", spec.kart_preset],
   ];
   return items.flatMap(([name, value]) => [el("dt", {}, name), el("dd", {}, String(value))]);
 }
