@@ -265,6 +265,14 @@ def _check_the_list_and_the_leaderboard(page: Page, base: str) -> None:
     page.screenshot(path=str(ARTIFACTS / "tournaments.png"), full_page=True)
 
 
+def _an_unknown_tournament_is_said_so(page: Page, base: str) -> None:
+    """An unknown id (with markup in it) is named as text, not markup."""
+    page.goto(f"{base}/tournaments/%3Cb%3Enope")
+    msg = page.locator("#msg.error")
+    msg.wait_for()
+    assert "No tournament <b>nope" in msg.inner_text() and page.locator("#msg b").count() == 0
+
+
 def test_tournament_pages_in_a_real_browser(tournament_server: str) -> None:
     """From the start page's navigation to the tournaments page; the form shows the API's 422, then launches a
     tiny round robin (Fixed-LQNG vs the lane follower, one lap on the oval, 2 races); its page follows the
@@ -290,6 +298,7 @@ def test_tournament_pages_in_a_real_browser(tournament_server: str) -> None:
             _check_the_results(page, base)
             _follow_a_race_link(page, base)
             _check_the_list_and_the_leaderboard(page, base)
+            _an_unknown_tournament_is_said_so(page, base)
         finally:
             browser.close()
     assert not outside, f"requests left the machine: {outside[:5]}"
