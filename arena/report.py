@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
@@ -123,8 +124,21 @@ def write_report(stats: TournamentStats, races: Sequence[RaceFigures], out: str 
     return written
 
 
+def plot_stem(kind: str, track: str | None = None) -> str:
+    """A plot's file name without ``.png``: ``wins_TRACK``, ``safety_TRACK`` or ``finish_times`` (characters other
+    than letters, digits, ``-`` and ``_`` in a track's name, as a path's slashes, become ``_``)."""
+    return kind if track is None else f"{kind}_{re.sub(r'[^A-Za-z0-9_-]', '_', track)}"
+
+
+def plot_stems(stats: TournamentStats) -> list[str]:
+    """The stems of the plots :func:`plot_report` draws for ``stats``, in its order."""
+    stems = [plot_stem(kind, track) for track in stats.tracks for kind in ("wins", "safety")]
+    return [*stems, plot_stem("finish_times")]
+
+
 def plot_report(stats: TournamentStats, races: Sequence[RaceFigures], folder: Path) -> list[Path]:
-    """The PNG plots: a win-matrix heatmap and safety bars per track, and the finish-time distributions."""
+    """The PNG plots: a win-matrix heatmap and safety bars per track, and the finish-time distributions
+    (:func:`plot_stems` names them)."""
     plt = _pyplot()
     written = []
     for track, table in stats.tracks.items():
@@ -142,7 +156,7 @@ def plot_report(stats: TournamentStats, races: Sequence[RaceFigures], folder: Pa
         fig.colorbar(image, ax=ax, label="wins")
         ax.set_title(f"Head-to-head wins ({track})")
         fig.tight_layout()
-        written.append(_save(fig, folder / f"wins_{track}.png", plt))
+        written.append(_save(fig, folder / f"{plot_stem('wins', track)}.png", plt))
 
         fig, ax = plt.subplots(figsize=(8, 4))
         width = 0.8 / len(SAFETY_METRICS)
@@ -158,7 +172,7 @@ def plot_report(stats: TournamentStats, races: Sequence[RaceFigures], folder: Pa
         ax.legend()
         ax.set_title(f"Safety ({track})")
         fig.tight_layout()
-        written.append(_save(fig, folder / f"safety_{track}.png", plt))
+        written.append(_save(fig, folder / f"{plot_stem('safety', track)}.png", plt))
     written.append(_finish_times(stats, races, folder, plt))
     return written
 
@@ -188,7 +202,7 @@ def _finish_times(stats: TournamentStats, races: Sequence[RaceFigures], folder: 
         ax.set_title(f"Finish times ({track}; finished races)")
         ax.set_ylabel("race time [s]")
     fig.tight_layout()
-    return _save(fig, folder / "finish_times.png", plt)
+    return _save(fig, folder / f"{plot_stem('finish_times')}.png", plt)
 
 
 def _save(fig: Figure, path: Path, plt: ModuleType) -> Path:

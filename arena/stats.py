@@ -18,6 +18,8 @@ Computed as the paper does, checked against its appendix tables on the original'
   Student's); an agent's figure is *marked* when it differs significantly from every other agent's (the paper's
   "pair-wise statistical significance with all other agent types"). Pooled and Welch's tests give the same 45
   safety marks on the original's logs, all equal to the paper's; pooled is scipy's default and is kept.
+* **Leaderboard** across tournaments (:func:`leaderboard`): per agent its races, wins, win rate, races finished
+  and safety score, over every race of the tournaments given.
 """
 
 from __future__ import annotations
@@ -299,3 +301,42 @@ def tournament_stats(races: Sequence[RaceFigures]) -> TournamentStats:
         raise ValueError(f"a track may not be called {COMBINED!r}")
     per_track = {name: track_stats(group) for name, group in tracks.items()}
     return TournamentStats({**per_track, COMBINED: track_stats(races)})
+
+
+@dataclass(frozen=True)
+class Standing:
+    """One agent's line of the leaderboard across tournaments: its races, wins (the paper's win rule), races
+    finished and safety score per race (mean and population std. dev. over all its races)."""
+
+    agent: str
+    tournaments: int
+    races: int
+    wins: int
+    finished: int
+    safety_score: MeanStd
+
+    @property
+    def win_rate(self) -> float:
+        """Wins per race."""
+        return self.wins / self.races if self.races else 0.0
+
+
+def leaderboard(tournaments: Iterable[Sequence[RaceFigures]]) -> list[Standing]:
+    """Every agent's standing over the races of several tournaments (each a sequence of its races), best first:
+    higher win rate, then more wins, then the lower mean safety score, then the name. An agent wins a race when
+    :func:`~arena.records.winner_index` names its kart; races and finished counts come from :func:`agent_stats`."""
+    groups = [list(group) for group in tournaments]
+    races = [race for group in groups for race in group]
+    agents = agent_order(name for race in races for name in race.agents)
+    wins = dict.fromkeys(agents, 0)
+    for race in races:
+        index = winner_index(race.karts)
+        if index is not None:
+            wins[race.karts[index].agent] += 1
+    standings = []
+    for agent in agents:
+        figures = agent_stats(races, agent)
+        entered = sum(any(agent in race.agents for race in group) for group in groups)
+        standings.append(Standing(agent, entered, figures.races, wins[agent], figures.finished, figures.safety_score))
+    standings.sort(key=lambda s: (-s.win_rate, -s.wins, s.safety_score.mean, s.agent))
+    return standings

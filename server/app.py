@@ -25,6 +25,7 @@ from server.routes import api_router
 from server.services import RaceServices, SceneFactory
 from server.settings import Settings
 from server.tournament_db import TournamentDatabase
+from server.tournament_plots import TournamentPlots
 from server.tournaments import TournamentRunner
 from server.warmup import warm_tick_path
 
@@ -112,6 +113,7 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
 
     app = FastAPI(title="HeadToHead Karting", description=DESCRIPTION, version="0.1.0", lifespan=lifespan)
     app.state.settings = settings
+    app.state.tournament_plots = TournamentPlots()
     app.include_router(api_router)
     web = _web_router(lambda: app.state.races)
     if web is not None:

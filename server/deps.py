@@ -8,6 +8,7 @@ from fastapi import Depends
 from fastapi.requests import HTTPConnection
 
 from server.live import LiveRaces
+from server.tournament_plots import TournamentPlots
 from server.tournaments import TournamentRunner
 
 
@@ -27,3 +28,12 @@ def get_tournaments(connection: HTTPConnection) -> TournamentRunner:
 
 
 Tournaments = Annotated[TournamentRunner, Depends(get_tournaments)]
+
+
+def get_tournament_plots(connection: HTTPConnection) -> TournamentPlots:
+    """The app's :class:`TournamentPlots` cache."""
+    plots: TournamentPlots = connection.app.state.tournament_plots
+    return plots
+
+
+TournamentPlotsDep = Annotated[TournamentPlots, Depends(get_tournament_plots)]

@@ -1,4 +1,5 @@
-"""The web pages: start page, race viewer (viser's client and its websocket relay) and the drive page.
+"""The web pages: start page, race viewer (viser's client and its websocket relay), the drive page and the
+tournament pages.
 
 The router knows nothing about sessions: the app passes ``scene_port(race_id)``, which returns the port of the
 race's live viser server or ``None``. The pages are static HTML + vanilla JS from ``web/static/`` that talk to the
@@ -56,7 +57,9 @@ def make_web_router(scene_port: Callable[[str], int | None]) -> APIRouter:
     * ``GET /races/{race_id}/viewer/``: viser's client page (404 when the race has no live viewer);
       ``GET /races/{race_id}/viewer`` redirects there;
     * websocket ``/races/{race_id}/viewer``: relayed to the race's viser server (closed with 4404 when unknown);
-    * ``GET /races/{race_id}/drive?kart=K&token=T``: the drive page (viewer + keyboard input).
+    * ``GET /races/{race_id}/drive?kart=K&token=T``: the drive page (viewer + keyboard input);
+    * ``GET /tournaments``: the tournaments page (stored tournaments, leaderboard, launch form);
+    * ``GET /tournaments/{tournament_id}``: a tournament's page (progress, races, tables and plots).
     """
     router = APIRouter(include_in_schema=False)
 
@@ -105,5 +108,15 @@ def make_web_router(scene_port: Callable[[str], int | None]) -> APIRouter:
     def drive_page(race_id: str) -> Response:
         """The drive page (the race id, kart and token are read from the URL by its script)."""
         return HTMLResponse(_static("drive.html"), headers=NO_CACHE)
+
+    @router.get("/tournaments", response_class=HTMLResponse)
+    def tournaments_page() -> Response:
+        """The tournaments page (its script reads ``/api/tournaments``)."""
+        return HTMLResponse(_static("tournaments.html"), headers=NO_CACHE)
+
+    @router.get("/tournaments/{tournament_id}", response_class=HTMLResponse)
+    def tournament_page(tournament_id: str) -> Response:
+        """A tournament's page (the id is read from the URL by its script, which says when there is none)."""
+        return HTMLResponse(_static("tournament.html"), headers=NO_CACHE)
 
     return router

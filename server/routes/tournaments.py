@@ -1,6 +1,9 @@
 """Tournaments: start one (``POST /api/tournaments``), follow its progress and read its results
 (``GET /api/tournaments/{id}``), its statistics (``GET /api/tournaments/{id}/stats``, the stats JSON of the
-README), list them, stop one. Its races are ordinary stored races: ``/api/races/{race_id}`` (result, replay).
+README), its report tables and plots for the pages (``GET /api/tournaments/{id}/tables``,
+``GET /api/tournaments/{id}/plots/{name}.png``), list them, stop one, and rank the agents across every stored
+tournament (``GET /api/tournaments/leaderboard``). Its races are ordinary stored races: ``/api/races/{race_id}``
+(result, replay).
 """
 
 from __future__ import annotations
@@ -9,19 +12,23 @@ import asyncio
 from datetime import datetime
 from typing import Any
 
-from fastapi import APIRouter, HTTPException, status
+from fastapi import APIRouter, HTTPException, Response, status
 from fastapi.exceptions import RequestValidationError
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from arena.stats import tournament_stats
+from arena.records import RaceFigures
+from arena.report import METRIC_TITLES, plan_rows, plot_stems, safety_rows, win_rows
+from arena.stats import COMBINED, Standing, leaderboard, tournament_stats
 from arena.tournament import TournamentSpec
-from server.deps import Tournaments
+from server.deps import TournamentPlotsDep, Tournaments
 from server.models import MAX_SEED
 from server.tournament_db import TOURNAMENT_ID, StoredTournament, TournamentRace
 from server.tournaments import TooManyTournamentsError, TournamentConflictError, TournamentRunner
 
 router = APIRouter()
 MAX_RACES_PER_PAIR = 500
+RESERVED_IDS = frozenset({"leaderboard"})  # GET /api/tournaments/leaderboard is the leaderboard
+MAX_LEADERBOARD_TOURNAMENTS = 10_000
 
 
 class TournamentIn(BaseModel):
@@ -37,6 +44,13 @@ class TournamentIn(BaseModel):
     time_limit: float | None = Field(default=None, gt=0.0, le=3600.0, description="[s] default: the rules'")
     kart_preset: str = Field(default="paper", pattern="^(paper|original)$")
     id: str | None = Field(default=None, pattern=TOURNAMENT_ID.pattern, description="default: a new id")
+
+    @field_validator("id")
+    @classmethod
+    def _not_reserved(cls, value: str | None) -> str | None:
+        if value in RESERVED_IDS:
+            raise ValueError(f"{value!r} is reserved (the leaderboard's address)")
+        return value
 
 
 class TournamentRaceOut(BaseModel):
@@ -72,6 +86,55 @@ class TournamentOut(BaseModel):
     stats_url: str
     races: list[TournamentRaceOut] | None = Field(None, description="only in GET /api/tournaments/{id}")
     stats: dict[str, Any] | None = Field(None, description="the stats JSON over the races so far (see the README)")
+
+
+class StandingOut(BaseModel):
+    """One agent's line of the leaderboard."""
+
+    agent: str
+    tournaments: int = Field(description="stored tournaments it raced in")
+    races: int
+    wins: int
+    win_rate: float = Field(description="wins / races")
+    finished: int = Field(description="races it completed every lap of")
+    safety_score_mean: float = Field(description="collisions at fault + illegal lane changes per race")
+    safety_score_std: float = Field(description="population std. dev. (ddof=0), as the paper's tables")
+
+
+class LeaderboardOut(BaseModel):
+    """Every agent's standing over the races of every stored tournament (running ones: their races so far)."""
+
+    tournaments: int = Field(description="stored tournaments with at least one race")
+    races: int
+    agents: list[StandingOut] = Field(description="best first: win rate, then wins, then lower safety score")
+
+
+class TrackTablesOut(BaseModel):
+    """The report's tables of one track (or ``combined``), rows of strings with a header row first, as
+    :mod:`arena.report` writes them (``*``: significant at p = 0.05)."""
+
+    wins: list[list[str]] = Field(description="row agent's wins against each column agent")
+    safety: list[list[str]]
+    plan: list[list[str]]
+
+
+class PlotOut(BaseModel):
+    """One PNG plot of a tournament."""
+
+    name: str
+    title: str
+    url: str
+
+
+class TournamentTablesOut(BaseModel):
+    """A tournament's report tables per track (then ``combined``) and its plots, over its races so far."""
+
+    id: str
+    done: int
+    total: int
+    tracks: dict[str, TrackTablesOut]
+    plots: list[PlotOut]
+    note: str
 
 
 def _spec(body: TournamentIn) -> TournamentSpec:
@@ -173,15 +236,119 @@ async def list_tournaments(tournaments: Tournaments) -> list[TournamentOut]:
     return [_view(t, tournaments.running(t.id)) for t in stored]
 
 
+def _standing_view(standing: Standing) -> StandingOut:
+    return StandingOut(
+        agent=standing.agent,
+        tournaments=standing.tournaments,
+        races=standing.races,
+        wins=standing.wins,
+        win_rate=standing.win_rate,
+        finished=standing.finished,
+        safety_score_mean=standing.safety_score.mean,
+        safety_score_std=standing.safety_score.std,
+    )
+
+
+def _leaderboard(runner: TournamentRunner) -> LeaderboardOut:
+    groups: list[list[RaceFigures]] = []
+    for stored in runner.store.list(limit=MAX_LEADERBOARD_TOURNAMENTS):
+        if stored.done:
+            figures = runner.store.figures(stored.id)
+            if figures:
+                groups.append(figures)
+    standings = leaderboard(groups)
+    return LeaderboardOut(
+        tournaments=len(groups),
+        races=sum(len(group) for group in groups),
+        agents=[_standing_view(s) for s in standings],
+    )
+
+
+# before /tournaments/{tournament_id}, which would take "leaderboard" for an id (a reserved one: see TournamentIn)
+@router.get("/tournaments/leaderboard", response_model=LeaderboardOut)
+async def tournament_leaderboard(tournaments: Tournaments) -> LeaderboardOut:
+    """Every agent's races, wins, win rate, races finished and safety score over the races of every stored
+    tournament (:func:`arena.stats.leaderboard`), best first."""
+    return await asyncio.to_thread(_leaderboard, tournaments)
+
+
 @router.get(
     "/tournaments/{tournament_id}", response_model=TournamentOut, responses={404: {"description": "no such tournament"}}
 )
-async def get_tournament(tournament_id: str, tournaments: Tournaments) -> TournamentOut:
-    """A tournament's live progress, its races so far (linked to their results and replays) and statistics."""
+async def get_tournament(tournament_id: str, tournaments: Tournaments, stats: bool = True) -> TournamentOut:
+    """A tournament's live progress, its races so far (linked to their results and replays) and statistics
+    (``?stats=false``: without them, a lighter answer to poll)."""
     stored = await _stored_or_404(tournaments, tournament_id)
     races = await asyncio.to_thread(tournaments.store.races, tournament_id)
-    view = await asyncio.to_thread(_view, stored, tournaments.running(tournament_id), races, True)
+    view = await asyncio.to_thread(_view, stored, tournaments.running(tournament_id), races, stats)
     return view
+
+
+def _tables(stored: StoredTournament, figures: list[RaceFigures]) -> TournamentTablesOut:
+    stats = tournament_stats(figures)
+    tracks = {
+        track: TrackTablesOut(wins=win_rows(table), safety=safety_rows(table), plan=plan_rows(table))
+        for track, table in stats.tracks.items()
+    }
+    titles = []
+    for track in stats.tracks:
+        shown = "all tracks" if track == COMBINED else track
+        titles += [f"Head-to-head wins ({shown})", f"Safety per race ({shown})"]
+    titles.append("Finish times (finished races)")
+    base = f"/api/tournaments/{stored.id}/plots"
+    plots = [
+        PlotOut(name=stem, title=title, url=f"{base}/{stem}.png?done={stored.done}")
+        for stem, title in zip(plot_stems(stats), titles, strict=True)
+    ]
+    note = (
+        "*: significant at p = 0.05 (wins: two-sided binomial test of the pair's decided races; per-race figures: "
+        "two-sided pooled t-tests, marked when significant against every other agent). Safety: mean and std. dev. "
+        f"over all races; {METRIC_TITLES['illegal_lane_changes']} under the rule shown."
+    )
+    return TournamentTablesOut(
+        id=stored.id, done=len(figures), total=stored.total, tracks=tracks, plots=plots, note=note
+    )
+
+
+@router.get(
+    "/tournaments/{tournament_id}/tables",
+    response_model=TournamentTablesOut,
+    responses={404: {"description": "no such tournament"}, 409: {"description": "no finished race yet"}},
+)
+async def tournament_tables(tournament_id: str, tournaments: Tournaments) -> TournamentTablesOut:
+    """The report's tables laid out like the paper's (wins row against column, safety, plan following) per track
+    and combined, over the races so far, and the URLs of the plots."""
+    stored = await _stored_or_404(tournaments, tournament_id)
+    figures = await asyncio.to_thread(tournaments.store.figures, tournament_id)
+    if not figures:
+        raise HTTPException(status.HTTP_409_CONFLICT, f"tournament {tournament_id} has no finished race yet")
+    return await asyncio.to_thread(_tables, stored, figures)
+
+
+@router.get(
+    "/tournaments/{tournament_id}/plots/{name}.png",
+    response_class=Response,
+    responses={
+        200: {"content": {"image/png": {}}, "description": "the plot (names: see .../tables)"},
+        404: {"description": "no such tournament or plot"},
+        409: {"description": "no finished race yet"},
+    },
+)
+async def tournament_plot(
+    tournament_id: str, name: str, tournaments: Tournaments, plots: TournamentPlotsDep
+) -> Response:
+    """A PNG plot of the tournament's races so far (:func:`arena.report.plot_report`, Agg backend; drawn once per
+    number of races stored and cached)."""
+    stored = await _stored_or_404(tournaments, tournament_id)
+    if not stored.done:
+        raise HTTPException(status.HTTP_409_CONFLICT, f"tournament {tournament_id} has no finished race yet")
+    drawn = await asyncio.to_thread(
+        plots.plots, tournament_id, stored.done, lambda: tournaments.store.figures(tournament_id)
+    )
+    png = drawn.get(name)
+    if png is None:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no plot {name!r}; plots: {sorted(drawn)}")
+    return Response(png, media_type="image/png", headers={"Cache-Control": "no-cache"})
 
 
 @router.get(

@@ -10,7 +10,8 @@ import pytest
 from scipy import stats as scipy_stats
 
 from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures, winner_index
-from arena.stats import COMBINED, MeanStd, binomial_win_test, t_test, tournament_stats
+from arena.report import plot_stem, plot_stems
+from arena.stats import COMBINED, MeanStd, binomial_win_test, leaderboard, t_test, tournament_stats
 
 
 def kart(
@@ -118,3 +119,32 @@ def test_an_agent_is_marked_only_when_it_differs_from_every_other_agent() -> Non
     assert not table.marked("collisions_at_fault", "mid") and not table.marked("collisions_at_fault", "high")
     marks = table.to_json()["tests"]["marks"]["metrics"]
     assert marks["low"]["collisions_at_fault"] and not marks["mid"]["collisions_at_fault"]
+
+
+def test_the_leaderboard_counts_races_wins_and_safety_across_tournaments_and_ranks_them() -> None:
+    first = [
+        race("oval", kart("a", 80.0, faults=1), kart("b", 81.0)),  # a wins
+        race("oval", kart("a", None), kart("b", None, per_step=3)),  # nobody wins
+    ]
+    second = [
+        race("complex", kart("c", 90.0), kart("a", 91.0, per_step=1, checkpoint=5)),  # c wins
+        race("complex", kart("b", 70.0), kart("c", 75.0)),  # b wins
+    ]
+    board = {s.agent: s for s in leaderboard([first, second])}
+    a, b, c = board["a"], board["b"], board["c"]
+    assert (a.tournaments, a.races, a.wins, a.finished) == (2, 3, 1, 2)
+    assert a.win_rate == pytest.approx(1 / 3)
+    assert (a.safety_score.mean, a.safety_score.n) == (pytest.approx(2 / 3), 3)  # 1, 0, 1 (the per-step rule)
+    assert (b.tournaments, b.races, b.wins, b.finished, b.win_rate) == (2, 3, 1, 2, pytest.approx(1 / 3))
+    assert b.safety_score.mean == 1.0  # 0, 3, 0
+    assert (c.tournaments, c.races, c.wins, c.finished, c.win_rate) == (1, 2, 1, 2, 0.5)
+    # c's win rate first; a and b tie on win rate and wins: the lower safety score first
+    assert [s.agent for s in leaderboard([first, second])] == ["c", "a", "b"]
+    assert leaderboard([]) == []
+
+
+def test_plot_file_names_are_safe_for_any_track_name() -> None:
+    assert plot_stem("wins", "oval") == "wins_oval"
+    assert plot_stem("safety", "tracks/my track.json") == "safety_tracks_my_track_json"
+    stats = tournament_stats([race("oval", kart("a", 80.0), kart("b", None))])
+    assert plot_stems(stats) == ["wins_oval", "safety_oval", "wins_combined", "safety_combined", "finish_times"]

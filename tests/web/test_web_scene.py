@@ -294,7 +294,21 @@ def test_pages(relay_app: tuple[ServerThread, RaceScene]) -> None:
         start = client.get("/")
         assert start.status_code == 200 and start.headers["content-type"].startswith("text/html")
         assert "HeadToHead Karting" in start.text and "/assets/start.js" in start.text
-        assets = ("start.js", "drive.js", "drive-worker.js", "common.js", "viewer-wait.js", "style.css")
+        assert 'href="/tournaments"' in start.text  # the navigation
+        tournaments = client.get("/tournaments")
+        assert tournaments.status_code == 200 and "/assets/tournaments.js" in tournaments.text
+        tournament = client.get("/tournaments/some-id")
+        assert tournament.status_code == 200 and "/assets/tournament.js" in tournament.text
+        assets = (
+            "start.js",
+            "drive.js",
+            "drive-worker.js",
+            "common.js",
+            "viewer-wait.js",
+            "tournaments.js",
+            "tournament.js",
+            "style.css",
+        )
         for asset in assets:
             kind = "css" if asset.endswith(".css") else "javascript"
             response = client.get(f"/assets/{asset}")
