@@ -51,22 +51,26 @@ def train_all(variants: list[dict], out: Path, steps: int, races: int) -> dict[s
 
 def _race(args: tuple[str, str, str, str, bool, int]) -> dict:
     """One race of a trained policy against ``opponent`` (runs in a worker process)."""
+    from controllers.base import Controller
     from controllers.fixed_line import FixedLinePlanner
     from controllers.hierarchical import HierarchicalController
     from controllers.race import RaceSpec, run_race
     from controllers.registry import REGISTRY, ControllerSpec, register
     from controllers.rl.agents import RL_RATE_HZ, E2EController
+    from controllers.rl.config import agent_kind
     from controllers.rl.tracker import RLTracker
 
     folder, agent, track, opponent, deterministic, seed = args
     name = f"sweep-{abs(hash((folder, deterministic))) % 10**8}"
     if name not in REGISTRY:
-        if agent == "e2e":
-            factory = lambda: E2EController(folder, deterministic)  # noqa: E731
-        else:
-            factory = lambda: HierarchicalController(  # noqa: E731
-                agent, FixedLinePlanner(), RLTracker(agent, folder, deterministic), rate_hz=RL_RATE_HZ
-            )
+        kind = agent_kind(agent)
+
+        def factory() -> Controller:
+            if kind == "e2e":
+                return E2EController(folder, deterministic)
+            tracker = RLTracker(kind, folder, deterministic)
+            return HierarchicalController(kind, FixedLinePlanner(), tracker, rate_hz=RL_RATE_HZ)
+
         register(ControllerSpec(name, "sweep variant", factory))
     lanes = (2, 3) if seed % 2 == 0 else (3, 2)
     outcome = run_race(RaceSpec(track=track, controllers=(name, opponent), seed=seed, start_lanes=lanes))
