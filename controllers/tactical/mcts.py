@@ -32,14 +32,15 @@ def _round_of(state: np.ndarray, start_round: int, final_round: int) -> int:
 
 
 @njit(cache=True)
-def _fastest_move(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins: int) -> int:
-    """The legal move with the earliest arrival (then the smaller lane change), or -1 if none."""
-    action, best_key = -1, 1 << 60
+def _fastest_outcome(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins: int) -> tuple[int, int, int]:
+    """(action, arrival, lane-change count) of the legal move with the earliest arrival (then the smaller lane
+    change); action -1 if there is none."""
+    action, best_key, best_arrival, best_count = -1, 1 << 60, 0, 0
     only = rules.allowed_lane(tb, state, p)
     for lane in range(n_lanes):
         if only >= 0 and lane != only:
             continue
-        _, v_max, entry, gate = rules.lane_gate(tb, state, p, lane)
+        count, v_max, entry, gate = rules.lane_gate(tb, state, p, lane)
         if not gate:
             continue
         # a higher arrival speed never arrives later, so the first legal bin from the top is this lane's fastest
@@ -48,9 +49,9 @@ def _fastest_move(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins:
             if ok:
                 key = arrival * 8 + abs(lane - state[p, rules.LANE])
                 if key < best_key:
-                    action, best_key = lane * bins + vbin, key
+                    action, best_key, best_arrival, best_count = lane * bins + vbin, key, arrival, count
                 break
-    return action
+    return action, best_arrival, best_count
 
 
 @njit(cache=True)
@@ -90,26 +91,28 @@ def _rollout(
         if p == rules.NO_PLAYER:
             r += 1
             continue
-        action = -1
+        action, arrival, count = -1, 0, 0
         # a modelled player follows its model: the fastest move into its predicted lane
         if state[p, rules.MODELLED] != 0 or np.random.random() < greedy:
-            action = _fastest_move(tb, state, p, n_lanes, bins)
+            action, arrival, count = _fastest_outcome(tb, state, p, n_lanes, bins)
         else:
             # rejection sampling is uniform over the legal moves and usually needs one or two draws
             for _ in range(REJECTION_TRIES):
                 candidate = np.random.randint(0, n_actions)
-                _, _, ok = rules.move_outcome(tb, state, p, candidate // bins, candidate % bins)
+                arrival, count, ok = rules.move_outcome(tb, state, p, candidate // bins, candidate % bins)
                 if ok:
                     action = candidate
                     break
             if action < 0:
-                count = rules.legal_moves(tb, state, p, moves)
-                if count > 0:
-                    action = moves[np.random.randint(0, count)]
+                n_legal = rules.legal_moves(tb, state, p, moves)
+                if n_legal > 0:
+                    action = moves[np.random.randint(0, n_legal)]
+                    arrival, count, _ = rules.move_outcome(tb, state, p, action // bins, action % bins)
         if action < 0:
             _stuck_values(state, p, values)
             return
-        rules.apply_move(tb, state, p, action)
+        # the outcome found while choosing is the move's: no second evaluation
+        rules.apply_outcome(tb, state, p, action // bins, action % bins, arrival, count)
     terminal_values(tb, state, reference, values)
 
 
@@ -129,7 +132,7 @@ def greedy_line(tb: GameTables, state: np.ndarray, round_cp: int, final_round: i
         if p == rules.NO_PLAYER:
             r += 1
             continue
-        action = _fastest_move(tb, state, p, n_lanes, bins)
+        action, arrival, changes = _fastest_outcome(tb, state, p, n_lanes, bins)
         if action < 0:
             if p == 0:
                 return count  # the ego (row 0) is stuck
@@ -138,7 +141,7 @@ def greedy_line(tb: GameTables, state: np.ndarray, round_cp: int, final_round: i
             out[count, 1] = -1
             count += 1
             continue
-        rules.apply_move(tb, state, p, action)
+        rules.apply_outcome(tb, state, p, action // bins, action % bins, arrival, changes)
         out[count, 0] = p
         out[count, 1] = action
         count += 1

@@ -15,7 +15,7 @@ from numba import njit
 INFEASIBLE = -1.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def segment_time(distance: float, v0: float, v1: float, accel: float, brake: float, v_max: float) -> float:
     """Shortest time [s] to cover ``distance`` [m] from speed ``v0`` to ``v1`` [m/s], or -1 if impossible.
 

@@ -36,7 +36,7 @@ COLLISION_SAMPLES = 5  # points along a section (both ends included) where two k
 NO_PLAYER = -1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def corner_speed(tb: GameTables, radius: float, wear_units: int) -> float:
     """Cornering speed [m/s] on ``radius`` [m] (0 = straight: top speed) at tyre wear ``wear_units``."""
     if radius <= 0.0:
@@ -68,7 +68,7 @@ def next_player(state: np.ndarray, round_checkpoint: int) -> int:
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _too_close(
     tb: GameTables,
     c: int,
@@ -99,7 +99,7 @@ def _too_close(
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _collides(tb: GameTables, state: np.ndarray, p: int, lane: int, arrival: int) -> bool:
     """Whether player ``p`` driving to ``lane`` (arriving at ``arrival``) comes too close to another player.
 
@@ -133,7 +133,7 @@ def _collides(tb: GameTables, state: np.ndarray, p: int, lane: int, arrival: int
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def lane_gate(tb: GameTables, state: np.ndarray, p: int, lane: int) -> tuple[int, float, float, int]:
     """(new lane-change count, cornering speed [m/s], fastest arrival the next section can brake from [m/s],
     legal flag 0/1) of player ``p`` heading for ``lane``: the part of :func:`move_outcome` that no speed bin
@@ -162,7 +162,7 @@ def lane_gate(tb: GameTables, state: np.ndarray, p: int, lane: int) -> tuple[int
     return count, v_max, entry, 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def bin_arrival(
     tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int, v_max: float, entry: float
 ) -> tuple[int, int]:
@@ -282,6 +282,14 @@ def apply_move(tb: GameTables, state: np.ndarray, p: int, action: int) -> bool:
     arrival, count, ok = move_outcome(tb, state, p, lane, vbin)
     if not ok:
         return False
+    apply_outcome(tb, state, p, lane, vbin, arrival, count)
+    return True
+
+
+@njit(cache=True)
+def apply_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int, arrival: int, count: int) -> None:
+    """Play the legal move ``lane``/``vbin`` of player ``p`` whose :func:`move_outcome` (``arrival``,
+    ``count``) the caller already has, in place."""
     c = state[p, CHECKPOINT] % tb.straight.shape[0]
     state[p, WEAR] = worn_after(tb, state[p, WEAR], tb.turn_angle[c])
     state[p, CHECKPOINT] += 1
@@ -291,4 +299,3 @@ def apply_move(tb: GameTables, state: np.ndarray, p: int, action: int) -> bool:
     state[p, BIN] = vbin
     state[p, TIME] = arrival
     state[p, LANE_COUNT] = count
-    return True
