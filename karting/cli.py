@@ -6,6 +6,7 @@ does not pay for loading the controllers (numba kernels) or the server (FastAPI,
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated
 
@@ -169,6 +170,12 @@ def train(
     log_std_init: Annotated[float, typer.Option(help="initial log std of the Gaussian actions (SB3: 0)")] = 0.0,
     ent_coef: Annotated[float, typer.Option(help="entropy bonus (spec: 5e-3)")] = 5e-3,
     gamma: Annotated[float, typer.Option(help="discount per decision (spec: 0.99)")] = 0.99,
+    near_wall_heading_deg: Annotated[
+        float, typer.Option(help="near-wall spawns turned toward the wall by up to this (spec: 0)")
+    ] = 0.0,
+    fine_tune_from: Annotated[
+        Path | None, typer.Option(help="start from this trained folder (fresh step count and schedule)")
+    ] = None,
 ) -> None:
     """Train an RL agent by PPO self-play on the training ovals (progress bar, checkpoints, log and curves)."""
     from dataclasses import replace
@@ -195,7 +202,8 @@ def train(
         env = replace(env, weights=replace(env.weights, wall_hit=wall_hit_penalty))
     if near_wall_spawns is not None:
         env = replace(env, near_wall_probability=near_wall_spawns)
-    result = run_training(env, ppo, folder, resume=resume, progress_bar=True)
+    env = replace(env, near_wall_heading=math.radians(near_wall_heading_deg))
+    result = run_training(env, ppo, folder, resume=resume, progress_bar=True, fine_tune_from=fine_tune_from)
     console.print(
         f"{kind}: {result.timesteps} steps in {result.wall_s:.0f} s ({result.env_steps_per_s:,.0f} env steps/s); "
         f"model, statistics, log and curves in {result.out}"

@@ -89,6 +89,9 @@ class EnvConfig:
     kart_preset: str = "paper"
     head_to_head_probability: float = 6.0 / 9.0  # second kart within +-1 checkpoint, distinct lanes
     near_wall_probability: float = 0.3  # spawn 1 m from the wall
+    # [rad] near-wall spawns turned toward the wall by up to this (0: along the track, as the original). Ours:
+    # agents that stopped nose to the wall in complex's hairpins had never been there in training
+    near_wall_heading: float = 0.0
     spawn_ahead: tuple[float, float] = (1.0, 4.0)  # [m] past the checkpoint
     max_behind_time: float = 1.0  # [s] random earlier crossing times of the kart behind
     mcts_speed_sigma: float = 1.5  # [m/s] MCTS random plans: 15 - |N(0, 1.5)|

@@ -2,7 +2,8 @@
 
 * Head-to-head spawn with probability 6/9: the other karts within +-1 checkpoint of the first, in distinct
   lanes; otherwise every kart at a random checkpoint.
-* Random lane, 1-4 m past the checkpoint; with probability 0.3 1 m from a side wall instead of on a lane.
+* Random lane, 1-4 m past the checkpoint; with probability 0.3 1 m from a side wall instead of on a lane
+  (optionally turned toward it by up to ``near_wall_heading``: ours, to learn to back off a wall).
 * Tyre wear ~ U[0, 0.95]; the kart behind finds the checkpoints the leader passed already reached, at random
   earlier times (so it is scored second there).
 * No tree search: ``planRandomly`` fills the plan with the racing lane moved by round(|N(0, 1)|) lanes and a
@@ -71,11 +72,15 @@ def spawn_race(world: World, race: int, config: EnvConfig, rng: np.random.Genera
         s = float(track.checkpoint_s[c] + rng.uniform(*config.spawn_ahead))
         lane = int(lanes[k % len(lanes)])
         d = float(track.lane_offsets(c)[lane - 1])
+        heading = 0.0
         if rng.random() < config.near_wall_probability:
             left, right = track.half_widths_at(s)
             d = left - 1.0 if rng.random() < 0.5 else -(right - 1.0)
+            # turned toward that wall by up to the configured angle (left-positive, like d)
+            if config.near_wall_heading > 0.0:  # (no extra draw otherwise: older seeded runs replay)
+                heading = float(np.sign(d) * rng.uniform(0.0, config.near_wall_heading))
         wear = float(rng.uniform(0.0, MAX_SPAWN_WEAR))
-        world.place_kart(race, k, s=s, d=d, wear=wear)
+        world.place_kart(race, k, s=s, d=d, heading_offset=heading, wear=wear)
         # the kart's spawn progress decides its checkpoint count; keep the lap the absolute index implies
         world.istate[race, k, st.I_CP_PASSED] = cp
     return cps

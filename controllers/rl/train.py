@@ -139,23 +139,37 @@ def make_model(venv: VecNormalize, ppo: PPOConfig) -> PPO:
 
 
 def train(
-    env: EnvConfig, ppo: PPOConfig, out: Path, *, resume: bool = False, progress_bar: bool = False
+    env: EnvConfig,
+    ppo: PPOConfig,
+    out: Path,
+    *,
+    resume: bool = False,
+    progress_bar: bool = False,
+    fine_tune_from: Path | None = None,
 ) -> TrainResult:
     """Train ``env.agent`` to ``ppo.total_steps`` environment steps (resuming from ``out`` when asked and a
-    model is there), write the model, statistics, log and curves into ``out``."""
+    model is there), write the model, statistics, log and curves into ``out``.
+
+    ``fine_tune_from``: start from that folder's model and normalisation statistics instead of a fresh policy,
+    with a fresh step count and learning-rate schedule (``ppo.total_steps`` more steps, e.g. on a changed
+    training set)."""
     torch.set_num_threads(ppo.torch_threads)
     out.mkdir(parents=True, exist_ok=True)
     pool = OpponentPool(ppo.window, ppo.play_against_latest, ppo.seed + 1)
     raw = SelfPlayVecEnv(RaceBatch(env, ppo.n_races), pool)
     raw.seed(ppo.seed)
     resuming = resume and (out / MODEL).exists()
-    if resuming:
-        venv = VecNormalize.load(str(out / NORMALISER), raw)
+    source = out if resuming else fine_tune_from
+    if source is not None:
+        venv = VecNormalize.load(str(source / NORMALISER), raw)
         venv.training = True
         schedule = LinearSchedule(ppo.learning_rate, 0.0, 1.0)
         model = PPO.load(
-            out / MODEL, env=venv, device="cpu", custom_objects={"learning_rate": schedule, "lr_schedule": schedule}
+            source / MODEL, env=venv, device="cpu", custom_objects={"learning_rate": schedule, "lr_schedule": schedule}
         )
+        if not resuming:
+            (out / LOG).unlink(missing_ok=True)
+            model.num_timesteps = 0
     else:
         (out / LOG).unlink(missing_ok=True)
         venv = VecNormalize(raw, norm_obs=True, norm_reward=ppo.normalise_reward, clip_obs=10.0, gamma=ppo.gamma)
