@@ -32,3 +32,14 @@ def test_smoke_training_beats_a_random_policy(tmp_path: Path) -> None:
     # resuming continues the step count
     more = train(env, PPOConfig(**{**ppo.__dict__, "total_steps": 10240}), tmp_path, resume=True)
     assert more.timesteps >= 10240 > result.timesteps - 1
+    # fine-tuning starts from those weights and statistics with a fresh step count, into another folder
+    tuned = train(env, PPOConfig(**{**ppo.__dict__, "total_steps": 2048}), tmp_path / "tuned", fine_tune_from=tmp_path)
+    assert 2048 <= tuned.timesteps < 4096
+    start = PPO.load(tmp_path / MODEL, device="cpu").policy.state_dict()
+    after = PPO.load(tmp_path / "tuned" / MODEL, device="cpu").policy.state_dict()
+    assert any(not np.allclose(start[k].numpy(), after[k].numpy()) for k in start)
+    base = VecNormalize.load(str(tmp_path / NORMALISER), SelfPlayVecEnv(RaceBatch(env, 32), pool)).obs_rms.count
+    assert (
+        VecNormalize.load(str(tmp_path / "tuned" / NORMALISER), SelfPlayVecEnv(RaceBatch(env, 32), pool)).obs_rms.count
+        > base
+    )
