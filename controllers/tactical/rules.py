@@ -168,18 +168,17 @@ def bin_arrival(
 ) -> tuple[int, int]:
     """(arrival time [0.01 s], legal flag 0/1) of player ``p`` choosing ``lane``/``vbin``, given the lane's
     :func:`lane_gate` (``v_max``, ``entry``): the speed-bin half of :func:`move_outcome`."""
-    if tb.bin_low[vbin] > v_max:
+    middle = 0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin])
+    # the next move starts from the bin's middle speed, whatever the arrival was capped to
+    if tb.bin_low[vbin] > v_max or middle > entry + 1e-9:
         return 0, 0
     c = state[p, CHECKPOINT] % tb.straight.shape[0]
     here = state[p, LANE]
     v0 = 0.5 * (tb.bin_low[state[p, BIN]] + tb.bin_high[state[p, BIN]])
-    v1 = min(0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin]), v_max)
+    v1 = min(middle, v_max)
     # entering above the corner speed means braking down to it first; segment_time handles that
     t = segment_time(tb.distance[c, here, lane], v0, v1, tb.accel, tb.brake, v_max)
     if t < 0.0:
-        return 0, 0
-    # the next move starts from the bin's middle speed, whatever the arrival was capped to
-    if 0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin]) > entry + 1e-9:
         return 0, 0
     arrival = state[p, TIME] + int(t * 100.0 + tb.penalty[c, here, lane] + 0.5)
     # eq. (8) gen_coll_avoid as the paper discretises it: no arrival close in time in the same lane or across a path
