@@ -5,6 +5,10 @@ From the repo root::
 
     .venv/bin/python scripts/ship_rl_weights.py e2e results/rl/e2e --seed 0 --wall-s 420 --commit abc1234 \
         --command "karting train e2e --steps 3000000" --note "interim weights"
+
+A model trained in stages (e.g. from scratch on one machine, then ``--fine-tune-from`` on another) lists each
+stage with ``--stage '{"command": ..., "commit": ..., "machine": ..., "wall_s": ..., "steps": ...}'`` (repeat
+it, in order); ``--command``, ``--commit`` and ``--wall-s`` then describe the whole.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ import platform
 import shutil
 from pathlib import Path
 
+from controllers.rl.curves import plot_curves
 from controllers.rl.policy import export_policy, weights_folder
 
 
@@ -29,12 +34,15 @@ def main() -> None:
     parser.add_argument("--wall-s", type=float, required=True)
     parser.add_argument("--commit", required=True, help="git commit the training ran on")
     parser.add_argument("--note", default="")
+    parser.add_argument("--machine", default="", help="where it trained (default: this machine)")
+    parser.add_argument("--stage", action="append", default=[], help="one training stage as JSON (repeatable)")
     args = parser.parse_args()
     out = weights_folder(args.agent)
     out.mkdir(parents=True, exist_ok=True)
     export_policy(args.folder, out)
-    for name in ("vecnormalize.pkl", "curves.png", "training_log.csv"):
+    for name in ("vecnormalize.pkl", "training_log.csv"):
         shutil.copy(args.folder / name, out / name)
+    plot_curves(out / "training_log.csv", out / "curves.png", title=f"{args.agent}: PPO self-play")
     with (args.folder / "training_log.csv").open() as fh:
         rows = list(csv.DictReader(fh))
     rewards = [(int(r["timesteps"]), float(r["ep_rew_mean"])) for r in rows if r["ep_rew_mean"]]
@@ -44,7 +52,9 @@ def main() -> None:
         "seed": args.seed,
         "steps": int(rows[-1]["timesteps"]),
         "wall_s": round(args.wall_s, 1),
-        "machine": f"{platform.node()} {platform.machine()} {os.cpu_count()} cores, {platform.python_version()}",
+        "machine": args.machine
+        or f"{platform.node()} {platform.machine()} {os.cpu_count()} cores, {platform.python_version()}",
+        "stages": [json.loads(stage) for stage in args.stage],
         "git_commit": args.commit,
         "files": {
             "policy.npz": "the actor (3x128 tanh + action head), observation mean/variance/clip, log std: inference",
