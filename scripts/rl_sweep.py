@@ -2,7 +2,7 @@
 
 Each variant is a ``karting train`` run (its own process, one torch thread) into ``OUT/NAME``; then each
 trained policy races ``fixed-lqng`` on the evaluation tracks (seeded, start lanes alternating), acting with the
-Gaussian's mean and with samples from it. One JSON object per variant goes to ``OUT/sweep.json`` and the last
+Gaussian's mean and with samples from it (stall recovery on, as the registered agents). One JSON object per variant goes to ``OUT/sweep.json`` and the last
 line of stdout.
 
     python scripts/rl_sweep.py --out results/rl_sweep --variants scripts/rl_variants.json --steps 3000000
@@ -67,8 +67,8 @@ def _race(args: tuple[str, str, str, str, bool, int]) -> dict:
 
         def factory() -> Controller:
             if kind == "e2e":
-                return E2EController(folder, deterministic)
-            tracker = RLTracker(kind, folder, deterministic)
+                return E2EController(folder, deterministic, stall_recovery=True)
+            tracker = RLTracker(kind, folder, deterministic, stall_recovery=True)
             return HierarchicalController(kind, FixedLinePlanner(), tracker, rate_hz=RL_RATE_HZ)
 
         register(ControllerSpec(name, "sweep variant", factory))

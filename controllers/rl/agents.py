@@ -42,6 +42,9 @@ class MCTSRLParams:
     deterministic: bool = parameter(
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
+    stall_recovery: bool = parameter(
+        True, "after 1 s stalled, reverse for 1 s toward the track's direction (ours, not the paper's)"
+    )
 
 
 @dataclass(frozen=True)
@@ -54,6 +57,9 @@ class FixedRLParams:
     deterministic: bool = parameter(
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
+    stall_recovery: bool = parameter(
+        True, "after 1 s stalled, reverse for 1 s toward the track's direction (ours, not the paper's)"
+    )
 
 
 @dataclass(frozen=True)
@@ -63,6 +69,9 @@ class E2EParams:
     deterministic: bool = parameter(
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
+    stall_recovery: bool = parameter(
+        True, "after 1 s stalled, reverse for 1 s toward the track's direction (ours, not the paper's)"
+    )
 
 
 def build_mcts_rl(params: MCTSRLParams) -> Controller:
@@ -71,7 +80,10 @@ def build_mcts_rl(params: MCTSRLParams) -> Controller:
         iterations=params.iterations, rate_hz=params.planner_rate_hz, params=GameParams(horizon=params.horizon)
     )
     return HierarchicalController(
-        "mcts-rl", planner, RLTracker("mcts-rl", deterministic=params.deterministic), rate_hz=RL_RATE_HZ
+        "mcts-rl",
+        planner,
+        RLTracker("mcts-rl", deterministic=params.deterministic, stall_recovery=params.stall_recovery),
+        rate_hz=RL_RATE_HZ,
     )
 
 
@@ -79,7 +91,10 @@ def build_fixed_rl(params: FixedRLParams) -> Controller:
     """Fixed racing-line planner + RL tracker."""
     planner = FixedLinePlanner(margin=params.line_margin_m)
     return HierarchicalController(
-        "fixed-rl", planner, RLTracker("fixed-rl", deterministic=params.deterministic), rate_hz=RL_RATE_HZ
+        "fixed-rl",
+        planner,
+        RLTracker("fixed-rl", deterministic=params.deterministic, stall_recovery=params.stall_recovery),
+        rate_hz=RL_RATE_HZ,
     )
 
 
@@ -89,8 +104,8 @@ class E2EController:
     name = "e2e"
     rate_hz = RL_RATE_HZ
 
-    def __init__(self, folder: str | None = None, deterministic: bool = True) -> None:
-        self.tracker = RLTracker("e2e", folder, deterministic)
+    def __init__(self, folder: str | None = None, deterministic: bool = True, stall_recovery: bool = False) -> None:
+        self.tracker = RLTracker("e2e", folder, deterministic, stall_recovery)
 
     def reset(self, context: RaceContext) -> None:
         """Load the weights and start a race."""
@@ -103,4 +118,4 @@ class E2EController:
 
 def build_e2e(params: E2EParams) -> Controller:
     """The end-to-end agent."""
-    return E2EController(deterministic=params.deterministic)
+    return E2EController(deterministic=params.deterministic, stall_recovery=params.stall_recovery)

@@ -20,6 +20,7 @@ What the live Observation does not carry is reconstructed here, the same way the
 
 from __future__ import annotations
 
+import math
 from typing import cast
 
 import numpy as np
@@ -30,6 +31,7 @@ from controllers.rl.actions import ACCELERATE, world_actions
 from controllers.rl.config import DECISION_STEPS, EPISODE_STEPS, STACK, AgentKind
 from controllers.rl.observations import TrackTables, build_frame, frame_size
 from controllers.rl.policy import Policy, load_policy, weights_folder
+from controllers.rl.recovery import StallRecovery
 from controllers.rl.spawns import racing_lane_at_checkpoints
 from sim_core import state as st
 from sim_core.observation import Observation
@@ -69,8 +71,11 @@ class RLTracker:
     is repeatable either way. Sampling drives slower: the steering noise costs speed through the tyres' limit.
     """
 
-    def __init__(self, agent: AgentKind, folder: str | None = None, deterministic: bool = True) -> None:
+    def __init__(
+        self, agent: AgentKind, folder: str | None = None, deterministic: bool = True, stall_recovery: bool = False
+    ) -> None:
         self.agent = agent
+        self.recovery: StallRecovery | None = StallRecovery() if stall_recovery else None
         self.folder = folder
         self.deterministic = deterministic
         self.rng = np.random.default_rng(0)
@@ -83,6 +88,8 @@ class RLTracker:
         """Load the weights (a clear :class:`~controllers.rl.policy.MissingWeightsError` if there are none) and
         prepare the track tables and the mirrored referee state."""
         self.policy = load_policy(self.folder or weights_folder(self.agent))
+        if self.recovery is not None:
+            self.recovery.reset()
         track, n = context.track, context.n_karts
         sizes = {STACK * frame_size(m): m for m in range(1, 9)}
         if self.policy.obs_size not in sizes:
@@ -133,6 +140,13 @@ class RLTracker:
         inputs, branch = world_actions(self.kart, np.array([me.speed]), raw[None, :])
         self.accelerating[0, 0] = float(branch[0] == ACCELERATE)
         self.action = Action(float(np.clip(inputs[0, 0], -1, 1)), float(np.clip(inputs[0, 1], -1, 1)))
+        if self.recovery is not None:
+            _, tangent = self._ctx.track.point_at(me.progress)
+            error = math.remainder(math.atan2(tangent[1], tangent[0]) - me.heading, math.tau)
+            override = self.recovery.override(observation.time, me.speed, error)
+            if override is not None:
+                self.action = override
+                self.accelerating[0, 0] = 0.0
         self.decisions += 1
         return self.action
 
