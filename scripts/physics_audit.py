@@ -75,7 +75,7 @@ def solo_race(track_name: str, controller: str, seed: int, kart: str) -> dict[st
     near_wall = np.convolve(contact.astype(float), np.ones(2 * CONTACT_GUARD + AVERAGE_STEPS + 1), "same") > 0
     clean = lateral[~near_wall[: len(lateral)]]
     result = world.result(0)
-    laps = [b - a for a, b in zip([0.0, *lap_marks[:-1]], lap_marks, strict=True)]
+    laps = [b - a for a, b in zip([0.0, *lap_marks[:-1]], lap_marks, strict=True)] if lap_marks else []
     return {
         "track": track_name,
         "controller": controller,
