@@ -14,6 +14,7 @@ from collections import defaultdict
 
 import numpy as np
 
+from arena.records import KartFigures
 from server.db import RaceDatabase
 from server.tournament_db import TournamentDatabase
 
@@ -28,11 +29,12 @@ def main() -> None:
     for race in db.figures(args.tournament):
         a, b = sorted(race.agents)
         cells[(race.track, a, b)].append(race)
-    out = []
-    print("| track | A vs B | wins A-B | finished A / B | mean finish A / B [s] | faults/race A / B | illegal/race A / B |")
+    out: list[dict[str, object]] = []
+    header = ["track", "A vs B", "wins A-B", "finished A / B", "mean finish A / B [s]", "faults/race A / B"]
+    print("| " + " | ".join([*header, "illegal/race A / B"]) + " |")
     print("|---|---|---|---|---|---|---|")
     for (track, a, b), races in sorted(cells.items()):
-        side = {a: [], b: []}
+        side: dict[str, list[KartFigures]] = {a: [], b: []}
         for race in races:
             for kart in race.karts:
                 side[kart.agent].append(kart)
@@ -41,19 +43,23 @@ def main() -> None:
         def mean(values: list[float]) -> float | None:
             return round(float(np.mean(values)), 2) if values else None
 
+        finished = [sum(k.finished for k in side[x]) for x in (a, b)]
+        times = [mean([k.total_time for k in side[x] if k.finished and k.total_time]) for x in (a, b)]
+        faults = [mean([k.collisions_at_fault for k in side[x]]) for x in (a, b)]
+        illegal = [mean([k.illegal_lane_changes.get("per_step", 0) for k in side[x]]) for x in (a, b)]
         row = {
             "track": track.split("/")[-1],
             "a": a,
             "b": b,
             "races": len(races),
             "wins": [wins[a], wins[b]],
-            "finished": [sum(k.finished for k in side[a]), sum(k.finished for k in side[b])],
-            "mean_finish_s": [mean([k.total_time for k in side[x] if k.finished and k.total_time]) for x in (a, b)],
-            "faults_per_race": [mean([k.collisions_at_fault for k in side[x]]) for x in (a, b)],
-            "illegal_per_race": [mean([k.illegal_lane_changes.get("per_step", 0) for k in side[x]]) for x in (a, b)],
+            "finished": finished,
+            "mean_finish_s": times,
+            "faults_per_race": faults,
+            "illegal_per_race": illegal,
         }
         out.append(row)
-        f, t, c, i = row["finished"], row["mean_finish_s"], row["faults_per_race"], row["illegal_per_race"]
+        f, t, c, i = finished, times, faults, illegal
         print(
             f"| {row['track']} | {a} vs {b} | {wins[a]}-{wins[b]} | {f[0]}/{len(races)} / {f[1]}/{len(races)} "
             f"| {t[0]} / {t[1]} | {c[0]} / {c[1]} | {i[0]} / {i[1]} |"

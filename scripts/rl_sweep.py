@@ -2,8 +2,8 @@
 
 Each variant is a ``karting train`` run (its own process, one torch thread) into ``OUT/NAME``; then each
 trained policy races ``fixed-lqng`` on the evaluation tracks (seeded, start lanes alternating), acting with the
-Gaussian's mean and with samples from it (stall recovery on, as the registered agents). One JSON object per variant goes to ``OUT/sweep.json`` and the last
-line of stdout.
+Gaussian's mean and with samples from it (stall recovery on, as the registered agents). One JSON object per
+variant goes to ``OUT/sweep.json`` and the last line of stdout.
 
     python scripts/rl_sweep.py --out results/rl_sweep --variants scripts/rl_variants.json --steps 3000000
 

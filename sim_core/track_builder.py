@@ -119,7 +119,9 @@ def oval_pieces(
     )
 
 
-def hairpin_pieces(outer_radius: float = 5.0, notch_radius: float = 1.0, inner_radius: float = 7.0) -> list[Straight | Curve]:
+def hairpin_pieces(
+    outer_radius: float = 5.0, notch_radius: float = 1.0, inner_radius: float = 7.0
+) -> list[Straight | Curve]:
     """A counter-clockwise circuit with a notch in one side: six left and two right 90 deg corners of inside
     radii ``outer_radius``, ``inner_radius`` and ``notch_radius`` [m] (tight corners both ways, as ``complex``
     has and the ovals have not). Straights are laid in 10-12 m pieces; the last two straights' lengths close it.
