@@ -32,6 +32,11 @@ from sim_core.observation import Observation
 RL_RATE_HZ = 50.0  # called every step; the tracker itself decides at 25 Hz and holds its action
 
 
+STALL_RECOVERY_HELP = (
+    "after 0.5 s stalled, drive off (or back off a wall) for 1 s; the policy never reverses (ours, not the paper's)"
+)
+
+
 @dataclass(frozen=True)
 class MCTSRLParams:
     """Public parameters of ``mcts-rl``."""
@@ -42,9 +47,7 @@ class MCTSRLParams:
     deterministic: bool = parameter(
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
-    stall_recovery: bool = parameter(
-        True, "after 1 s stalled, reverse for 1 s toward the track's direction (ours, not the paper's)"
-    )
+    stall_recovery: bool = parameter(True, STALL_RECOVERY_HELP)
 
 
 @dataclass(frozen=True)
@@ -57,9 +60,7 @@ class FixedRLParams:
     deterministic: bool = parameter(
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
-    stall_recovery: bool = parameter(
-        True, "after 1 s stalled, reverse for 1 s toward the track's direction (ours, not the paper's)"
-    )
+    stall_recovery: bool = parameter(True, STALL_RECOVERY_HELP)
 
 
 @dataclass(frozen=True)
@@ -69,9 +70,7 @@ class E2EParams:
     deterministic: bool = parameter(
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
-    stall_recovery: bool = parameter(
-        True, "after 1 s stalled, reverse for 1 s toward the track's direction (ours, not the paper's)"
-    )
+    stall_recovery: bool = parameter(True, STALL_RECOVERY_HELP)
 
 
 def build_mcts_rl(params: MCTSRLParams) -> Controller:

@@ -143,6 +143,7 @@ class RLTracker:
         if self.recovery is not None:
             _, tangent = self._ctx.track.point_at(me.progress)
             error = math.remainder(math.atan2(tangent[1], tangent[0]) - me.heading, math.tau)
+            self.action = self.recovery.forward_only(self.action, me.speed)
             override = self.recovery.override(observation.time, me.speed, error)
             if override is not None:
                 self.action = override
