@@ -112,6 +112,12 @@ class ReplayView(Protocol):
 class _Open:
     view: ReplayView
     last_seen: float  # [s] monotonic: when it last had a viewer or was asked for
+    relayed: int = 0  # browser websockets relayed to it now
+
+    @property
+    def watched(self) -> bool:
+        """Whether anyone watches (a relayed websocket, or a viewer the scene itself counts)."""
+        return self.relayed > 0 or self.view.viewers > 0
 
 
 class ReplayScenes:
@@ -143,26 +149,42 @@ class ReplayScenes:
             return entry.view.port
         task = self._opening.get(race_id)
         if task is None:
-            await self._make_room()
+            if self.open_count() >= self.max_open and not self._idle():
+                raise ViewersBusyError(f"{self.max_open} replays are being watched; try again later")
             task = asyncio.get_running_loop().create_task(asyncio.to_thread(self.open_view, race_id))
             self._opening[race_id] = task
             task.add_done_callback(lambda done: self._opened(race_id, done))
         view = await asyncio.shield(task)
-        return view.port if view is not None else None
+        if view is None:
+            return None
+        self._open.setdefault(race_id, _Open(view, time.monotonic()))
+        # only a race that has a replay makes an idle scene give way
+        while len(self._open) > self.max_open and (idle := self._idle(but=race_id)):
+            await self._close(min(idle)[1])
+        return view.port
 
     def _opened(self, race_id: str, task: asyncio.Task[ReplayView | None]) -> None:
         self._opening.pop(race_id, None)
         if not task.cancelled() and task.exception() is None and (view := task.result()) is not None:
             self._open[race_id] = _Open(view, time.monotonic())
 
-    async def _make_room(self) -> None:
-        if self.open_count() < self.max_open:
-            return
-        idle = [(entry.last_seen, rid) for rid, entry in self._open.items() if entry.view.viewers == 0]
-        if not idle:
-            raise ViewersBusyError(f"{self.max_open} replays are being watched; try again later")
-        _, oldest = min(idle)
-        await self._close(oldest)
+    def _idle(self, but: str | None = None) -> list[tuple[float, str]]:
+        """(last seen, race id) of the open scenes without viewers (besides ``but``)."""
+        return [(e.last_seen, rid) for rid, e in self._open.items() if not e.watched and rid != but]
+
+    def viewer_joined(self, race_id: str) -> None:
+        """A browser's websocket is being relayed to ``race_id``'s scene."""
+        entry = self._open.get(race_id)
+        if entry is not None:
+            entry.relayed += 1
+            entry.last_seen = time.monotonic()
+
+    def viewer_left(self, race_id: str) -> None:
+        """A relayed websocket of ``race_id``'s scene ended."""
+        entry = self._open.get(race_id)
+        if entry is not None:
+            entry.relayed = max(entry.relayed - 1, 0)
+            entry.last_seen = time.monotonic()
 
     async def _close(self, race_id: str) -> None:
         entry = self._open.pop(race_id, None)
@@ -176,7 +198,7 @@ class ReplayScenes:
         """Close every scene without viewers for ``idle_s``."""
         now = time.monotonic()
         for race_id, entry in list(self._open.items()):
-            if entry.view.viewers > 0:
+            if entry.watched:
                 entry.last_seen = now
             elif now - entry.last_seen > self.idle_s:
                 log.info("replay %s: closed after %.0f s without viewers", race_id, now - entry.last_seen)
@@ -213,6 +235,14 @@ class StoredReplays:
             return not session.live and session.result is not None
         stored = await asyncio.to_thread(races.services.db.get, race_id)
         return stored is not None and stored.result is not None
+
+    def viewer_joined(self, race_id: str) -> None:
+        """A browser started watching ``race_id``'s replay."""
+        self.scenes().viewer_joined(race_id)
+
+    def viewer_left(self, race_id: str) -> None:
+        """A browser stopped watching ``race_id``'s replay."""
+        self.scenes().viewer_left(race_id)
 
     async def replay_port(self, race_id: str) -> int | None:
         """The race's replay scene port (opened if need be); ``None`` without a replay or without 3D views."""

@@ -57,6 +57,12 @@ class ReplayDirectory(Protocol):
         """The local port of the race's replay scene, opened if need be (``None``: no replay); raises
         :class:`web.viewer.ViewersBusyError` when no more scenes can be opened now."""
 
+    def viewer_joined(self, race_id: str) -> None:
+        """A browser's websocket is being relayed to the race's replay scene (it is watched)."""
+
+    def viewer_left(self, race_id: str) -> None:
+        """That websocket ended."""
+
 
 @functools.cache
 def _viewer_page_gzip(script: str) -> bytes:
@@ -212,4 +218,9 @@ def _add_replay_routes(router: APIRouter, replays: ReplayDirectory | None) -> No
             await websocket.accept(subprotocol=requested_subprotocol(websocket))
             await websocket.close(code=CLOSE_UNKNOWN_RACE, reason=f"no replay for race {race_id}"[:120])
             return
-        await relay_viewer(websocket, port)
+        assert replays is not None  # (a port came from it)
+        replays.viewer_joined(race_id)
+        try:
+            await relay_viewer(websocket, port)
+        finally:
+            replays.viewer_left(race_id)
