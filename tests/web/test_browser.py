@@ -421,9 +421,25 @@ def _race_page_shows_charts_and_incidents(page: Page, base: str, race_id: str) -
     page.screenshot(path=str(ARTIFACTS / "race-page.png"), full_page=True)
 
 
+def _live_viewer_moves_to_the_replay(page: Page, base: str) -> None:
+    """A live viewer of a race that ends (a race waiting for its human driver, then stopped) moves to the replay
+    player by itself: the address the API gives as the race's viewer once it is over."""
+    body = {"track": "oval", "laps": 1, "karts": [{"controller": "human"}, {"controller": "lane-follower"}]}
+    race = httpx.post(f"{base}/api/races", json=body, timeout=60).json()
+    race_id = race["id"]
+    page.goto(f"{base}{race['viewer_url']}")
+    page.wait_for_function("() => window.__viserMutable?.nodeRefFromName?.['/karts/kart0'] != null")
+    assert page.url.startswith(f"{base}/races/{race_id}/viewer/")
+    stopped = httpx.post(f"{base}/api/races/{race_id}/stop", timeout=60).json()
+    assert stopped["status"] == "stopped" and stopped["viewer_url"] == f"/races/{race_id}/replay/"
+    page.wait_for_url(f"{base}/races/{race_id}/replay/**")
+    page.get_by_role("button", name="Play").wait_for()
+
+
 def test_replay_player_and_race_page_in_a_real_browser(finished_race: tuple[str, str]) -> None:
     """A finished race: its viewer address opens the replay player, which plays, pauses and scrubs; its page
-    draws the charts and the incident timeline. No request may leave the machine."""
+    draws the charts and the incident timeline; a live viewer of a race that ends moves to its replay. No
+    request may leave the machine."""
     from playwright.sync_api import sync_playwright
 
     base, race_id = finished_race
@@ -444,6 +460,7 @@ def test_replay_player_and_race_page_in_a_real_browser(finished_race: tuple[str,
             page.set_default_timeout(60_000)
             _replay_plays_pauses_and_scrubs(page, base, race_id)
             _race_page_shows_charts_and_incidents(page, base, race_id)
+            _live_viewer_moves_to_the_replay(page, base)
         finally:
             browser.close()
     assert not outside, f"requests left the machine: {outside[:5]}"
