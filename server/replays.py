@@ -40,11 +40,8 @@ class RecordedRace:
     def frames(self) -> ReplayFrames:
         """The race as the replay player's frames."""
         race = self.race
-        faults = (
-            [k.faults.controller_faults for k in sorted(race.result.karts, key=lambda k: k.index)]
-            if (race.result is not None)
-            else []
-        )
+        records = sorted(race.result.karts, key=lambda k: k.index) if race.result is not None else []
+        faults = [k.faults.controller_faults for k in records]  # (the race's totals: not kept per step)
         return ReplayFrames(
             race.id, race.track, race.laps, race.karts, self.timeline, self.replay.get("plans") or [], faults
         )
