@@ -21,12 +21,15 @@ from server.live import LiveRaces
 from server.loop import make_ordinary, make_realtime
 from server.planning import PlannerPool
 from server.race_config import HUMAN
+from server.replays import RecordedRace, RecordedRaces, ReplayScenes, ReplayView, StoredReplays
 from server.routes import api_router
+from server.routes.catalogue import load_track
 from server.services import RaceServices, SceneFactory
 from server.settings import Settings
 from server.tournament_db import TournamentDatabase
 from server.tournament_plots import TournamentPlots
 from server.tournaments import TournamentRunner
+from server.views import page_url
 from server.warmup import warm_tick_path
 
 log = logging.getLogger(__name__)
@@ -37,7 +40,8 @@ DESCRIPTION = """Head-to-head kart races between registered controllers and peop
 * Websockets: `/api/races/{id}/drive?kart=K&token=T` (drive a human kart) and `/api/races/{id}/telemetry`
   (the race's frames at about 25 Hz); their messages are described in `server/routes/drive.py` and
   `server/routes/telemetry.py`.
-* The 3D view of a race: `/races/{id}/viewer/`.
+* The 3D view of a race: `/races/{id}/viewer/` while it is live, its replay player `/races/{id}/replay/` once it
+  is over (the race's `viewer_url` says which); its page: `/races/{id}`.
 """
 
 
@@ -52,13 +56,47 @@ def _scene_factory(settings: Settings) -> SceneFactory | None:
     return RaceScene
 
 
-def _web_router(races: Callable[[], LiveRaces]) -> APIRouter | None:
+ReplayFactory = Callable[[RecordedRace], ReplayView]
+
+
+def _replay_factory(settings: Settings) -> ReplayFactory | None:
+    if not settings.viewer_enabled:
+        return None
+    try:
+        from web.replay_scene import ReplayScene
+    except ImportError as exc:
+        log.warning("no replay player: web.replay_scene is not available (%s)", exc)
+        return None
+
+    def open_replay(recorded: RecordedRace) -> ReplayView:
+        race = recorded.race
+        karts = [(kart.name, kart.controller) for kart in race.karts]
+        label = f"{race.track} · replay of race {race.id}"
+        return ReplayScene(recorded.track, karts, label, recorded.frames(), page_url(race.id))
+
+    return open_replay
+
+
+def _replay_scenes(recorded: RecordedRaces, settings: Settings) -> ReplayScenes:
+    """The replay scenes, started (without 3D views, none ever opens)."""
+    factory = _replay_factory(settings)
+
+    def open_view(race_id: str) -> ReplayView | None:
+        loaded = recorded.load(race_id) if factory is not None else None
+        return factory(loaded) if factory is not None and loaded is not None else None
+
+    scenes = ReplayScenes(open_view, settings.max_replays, settings.replay_idle_s)
+    scenes.start()
+    return scenes
+
+
+def _web_router(races: Callable[[], LiveRaces], replays: StoredReplays) -> APIRouter | None:
     try:
         from web.routes import make_web_router
     except ImportError as exc:
         log.warning("no web pages: web.routes is not available (%s)", exc)
         return None
-    router: APIRouter = make_web_router(lambda race_id: races().scene_port(race_id))
+    router: APIRouter = make_web_router(lambda race_id: races().scene_port(race_id), replays)
     return router
 
 
@@ -88,6 +126,8 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
         hosts = ControllerHosts(settings.controller_hosts) if settings.controller_hosts else None
         races = LiveRaces(RaceServices(settings, catalogue, pool, hosts, db, scene_factory))
         app.state.races = races
+        app.state.recorded = recorded = RecordedRaces(db, load_track)
+        app.state.replay_scenes = replay_scenes = _replay_scenes(recorded, settings)
         tournaments = await asyncio.to_thread(
             lambda: TournamentRunner(TournamentDatabase(db), settings.tournament_workers, settings.max_tournaments)
         )
@@ -103,6 +143,7 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
             yield
         finally:
             await races.shutdown()
+            await replay_scenes.shutdown()
             await asyncio.to_thread(tournaments.shutdown)
             await asyncio.to_thread(pool.shutdown)
             if hosts is not None:
@@ -115,7 +156,7 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
     app.state.settings = settings
     app.state.tournament_plots = TournamentPlots()
     app.include_router(api_router)
-    web = _web_router(lambda: app.state.races)
+    web = _web_router(lambda: app.state.races, StoredReplays(lambda: app.state.races, lambda: app.state.replay_scenes))
     if web is not None:
         app.include_router(web)
     return app

@@ -91,6 +91,7 @@ class StoredRace:
             tick_stats=self.tick_stats,
             winner=record.winner if record is not None else None,
             error=None,
+            recorded=record is not None,
         )
 
 

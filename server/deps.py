@@ -8,6 +8,7 @@ from fastapi import Depends
 from fastapi.requests import HTTPConnection
 
 from server.live import LiveRaces
+from server.replays import RecordedRaces
 from server.tournament_plots import TournamentPlots
 from server.tournaments import TournamentRunner
 
@@ -19,6 +20,15 @@ def get_races(connection: HTTPConnection) -> LiveRaces:
 
 
 Races = Annotated[LiveRaces, Depends(get_races)]
+
+
+def get_recorded(connection: HTTPConnection) -> RecordedRaces:
+    """The app's :class:`RecordedRaces` (set up in the lifespan)."""
+    recorded: RecordedRaces = connection.app.state.recorded
+    return recorded
+
+
+Recorded = Annotated[RecordedRaces, Depends(get_recorded)]
 
 
 def get_tournaments(connection: HTTPConnection) -> TournamentRunner:

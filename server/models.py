@@ -165,10 +165,15 @@ class RaceDetailOut(RaceSummaryOut):
     step: int
     drivers: list[DriverStatusOut]
     tick_stats: TickStatsOut | None
-    viewer_url: str | None
+    viewer_url: str | None = Field(
+        description="the 3D view: the live view while the race is live, the replay player once it is over "
+        "(None when the server runs without 3D views or the race left nothing to replay)"
+    )
+    page_url: str = Field(description="the race's page (standings, laps, charts, incidents)")
     telemetry_url: str
     result_url: str
     replay_url: str
+    report_url: str = Field(description="the figures of the race's page (JSON), once it is over")
     error: str | None
 
 

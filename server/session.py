@@ -171,6 +171,7 @@ class RaceSession:
             tick_stats=self.tick_stats() if ticks else None,
             winner=self.result.winner if self.result is not None else None,
             error=self.error,
+            recorded=self.result is not None and not self.live,
         )
 
     # ------------------------------------------------------------------ the race task

@@ -46,6 +46,10 @@ class Settings(BaseSettings):
     keep_finished_s: float = Field(
         default=60.0, ge=0.0, description="[s] a finished race stays in memory (scene, sockets) this long"
     )
+    max_replays: int = Field(default=4, ge=1, description="replay scenes (3D) open at once")
+    replay_idle_s: float = Field(
+        default=120.0, gt=0.0, description="[s] a replay scene without viewers is closed after this long"
+    )
     realtime_priority: int = Field(
         default=0,
         ge=0,

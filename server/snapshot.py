@@ -91,3 +91,4 @@ class RaceSnapshot:
     tick_stats: TickSummary | None
     winner: int | None
     error: str | None
+    recorded: bool = False  # over, with its result and replay stored

@@ -20,12 +20,25 @@ from server.models import (
 from server.race_config import KartEntry
 from server.results import RaceRecord
 from server.snapshot import DriverState, RaceSnapshot, Standing
+from server.status import RaceStatus
 from server.ticks import TickSummary
 
 
-def viewer_url(race_id: str, viewer: bool) -> str | None:
-    """The race's 3D view page (None when the server runs without 3D views)."""
-    return f"/races/{race_id}/viewer/" if viewer else None
+def viewer_url(
+    race_id: str, viewer: bool, status: RaceStatus = RaceStatus.STARTING, recorded: bool = False
+) -> str | None:
+    """The race's 3D view page: the live view while the race is live, its replay player once it is over and
+    recorded (None when the server runs without 3D views, or for a race over with nothing recorded)."""
+    if not viewer:
+        return None
+    if status.live:
+        return f"/races/{race_id}/viewer/"
+    return f"/races/{race_id}/replay/" if recorded else None
+
+
+def page_url(race_id: str) -> str:
+    """The race's page."""
+    return f"/races/{race_id}"
 
 
 def telemetry_url(race_id: str) -> str:
@@ -116,10 +129,12 @@ def detail_view(snapshot: RaceSnapshot, viewer: bool) -> RaceDetailOut:
         step=snapshot.step,
         drivers=[driver_view(d) for d in snapshot.drivers],
         tick_stats=tick_stats_view(snapshot.tick_stats),
-        viewer_url=viewer_url(race_id, viewer),
+        viewer_url=viewer_url(race_id, viewer, snapshot.status, snapshot.recorded),
+        page_url=page_url(race_id),
         telemetry_url=telemetry_url(race_id),
         result_url=f"/api/races/{race_id}/result",
         replay_url=f"/api/races/{race_id}/replay",
+        report_url=f"/api/races/{race_id}/report",
         error=snapshot.error,
     )
 

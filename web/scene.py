@@ -150,6 +150,12 @@ class RaceScene:
         """Whether :meth:`close` was called."""
         return self._closed
 
+    @property
+    def viewer_count(self) -> int:
+        """Browser tabs connected now."""
+        with self._viewers_lock:
+            return len(self._viewers)
+
     def update(self, frame: RaceFrame) -> None:
         """Show ``frame``: kart poses every call, plans when ``frame.plans_version`` changed, the HUD a few
         times per second and follow cameras at ~20 Hz.

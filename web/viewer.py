@@ -25,12 +25,26 @@ log = logging.getLogger(__name__)
 VISER_SUBPROTOCOL = f"viser-v{viser.__version__}"
 CLOSE_UPSTREAM_UNAVAILABLE = 1011  # the race's viser server could not be reached
 CLOSE_UNKNOWN_RACE = 4404  # used by web.routes for races without a viewer
+CLOSE_TRY_AGAIN_LATER = 1013  # every replay scene the server allows is being watched
+
+
+class ViewersBusyError(RuntimeError):
+    """No 3D view can be opened now: as many as the server allows are open and watched."""
 
 
 @functools.cache
 def viewer_index_html() -> bytes:
     """viser's client page (``viser/client/build/index.html``), read once."""
     return (Path(viser.__file__).parent / "client" / "build" / "index.html").read_bytes()
+
+
+@functools.cache
+def viewer_page_with(script: str) -> bytes:
+    """viser's client page that also loads the app's ``/assets/{script}`` (read once per script)."""
+    page = viewer_index_html()
+    tag = f'<script src="/assets/{script}" defer></script>'.encode()
+    at = page.rfind(b"</head>")
+    return page[:at] + tag + page[at:] if at >= 0 else page + tag
 
 
 def requested_subprotocol(websocket: WebSocket) -> str | None:

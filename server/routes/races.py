@@ -18,10 +18,11 @@ from fastapi.responses import JSONResponse
 from controllers.registry import ControllerSpec
 from server.controller_params import check_params
 from server.db import StoredRace
-from server.deps import Races
+from server.deps import Races, Recorded
 from server.live import LiveRaces, TooManyRacesError
 from server.models import RaceCreatedOut, RaceDetailOut, RaceIn, RaceSummaryOut, ResultOut, TicksOut
 from server.race_config import HUMAN, KartEntry, RaceConfig
+from server.race_report import RaceReport
 from server.routes.catalogue import load_track, track_names
 from server.status import OVER_STATUSES, RaceStatus
 from server.views import created_view, detail_view, result_view, summary_view, ticks_view
@@ -207,3 +208,24 @@ async def race_replay(race_id: str, races: Races) -> JSONResponse:
         race = await _stored_or_404(races, race_id)
         raise _not_over(race_id, race.status)
     return JSONResponse(replay)
+
+
+@router.get(
+    "/races/{race_id}/report",
+    response_model=RaceReport,
+    responses={
+        404: {"description": "no such race"},
+        409: {"description": "the race is not over, or left no replay to derive the figures from"},
+    },
+)
+async def get_race_report(race_id: str, races: Races, recorded: Recorded) -> RaceReport:
+    """The figures of the race's page, re-simulated from its replay: lap and sector times, gaps, positions by
+    lap, speed along the lap, tyre wear and the incidents with their times."""
+    session = races.get(race_id)
+    if session is not None and (session.live or session.result is None):
+        raise _not_over(race_id, session.status)
+    loaded = await asyncio.to_thread(recorded.load, race_id)
+    if loaded is None:
+        race = await _stored_or_404(races, race_id)
+        raise HTTPException(status.HTTP_409_CONFLICT, f"race {race_id} is {race.status.value}: no replay to analyse")
+    return await asyncio.to_thread(loaded.report)

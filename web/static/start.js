@@ -62,6 +62,8 @@ function raceRow(race) {
     el("td", {}, standingsCell(race)),
     el("td", {class: "small"},
       live ? el("div", {}, el("a", {href: viewerUrl, target: "_blank", rel: "noopener"}, "viewer")) : null,
+      el("div", {}, el("a", {href: `/races/${encodeURIComponent(id)}`, class: "race-page"}, "race page")),
+      live ? null : el("div", {}, el("a", {href: `/races/${encodeURIComponent(id)}/replay/`, target: "_blank", rel: "noopener", class: "replay-3d"}, "3D replay")),
       live ? null : el("div", {}, el("a", {href: resultUrl, target: "_blank", rel: "noopener"}, "result")),
       live ? null : el("div", {}, el("a", {href: replayUrl, target: "_blank", rel: "noopener"}, "replay"))),
   );

@@ -67,7 +67,9 @@ function raceRow(race) {
     el("td", {}, winner),
     el("td", {}, `${fmtNumber(race.duration, 2)} s`),
     el("td", {class: "muted"}, `${fmtNumber(race.wall_seconds, 1)} s`),
-    el("td", {class: "small"}, link(race.url, "race"), link(race.result_url, "result"), link(race.replay_url, "replay")),
+    el("td", {class: "small"}, link(race.url, "race"), link(race.result_url, "result"), link(race.replay_url, "replay"),
+      el("div", {}, el("a", {href: `/races/${encodeURIComponent(race.race_id)}`, class: "race-page"}, "race page")),
+      el("div", {}, el("a", {href: `/races/${encodeURIComponent(race.race_id)}/replay/`, target: "_blank", rel: "noopener", class: "replay-3d"}, "3D replay"))),
   );
 }
 
