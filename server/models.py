@@ -91,7 +91,9 @@ class RaceCreatedOut(BaseModel):
     seed: int
     kart_preset: str
     karts: list[CreatedKartOut]
-    viewer_url: str | None = Field(description="the 3D view (None when the server runs without it)")
+    viewer_url: str | None = Field(
+        description="the live 3D view, which opens while the race starts (None when the server runs without it)"
+    )
     telemetry_url: str = Field(description="websocket of RaceFrame messages")
     drive_tokens: dict[str, str] = Field(description="kart index -> token, human karts only")
 
@@ -165,7 +167,10 @@ class RaceDetailOut(RaceSummaryOut):
     step: int
     drivers: list[DriverStatusOut]
     tick_stats: TickStatsOut | None
-    viewer_url: str | None
+    viewer_url: str | None = Field(
+        description="the live 3D view while it is open: from the start until keep_finished_s after the end "
+        "(None before and after, and when the server runs without 3D views)"
+    )
     telemetry_url: str
     result_url: str
     replay_url: str

@@ -24,7 +24,7 @@ from server.ticks import TickSummary
 
 
 def viewer_url(race_id: str, viewer: bool) -> str | None:
-    """The race's 3D view page (None when the server runs without 3D views)."""
+    """The race's live 3D view page when ``viewer`` (it is open, or about to open for a new race), else None."""
     return f"/races/{race_id}/viewer/" if viewer else None
 
 
@@ -106,7 +106,7 @@ def summary_view(snapshot: RaceSnapshot) -> RaceSummaryOut:
 
 
 def detail_view(snapshot: RaceSnapshot, viewer: bool) -> RaceDetailOut:
-    """A race in full."""
+    """A race in full; ``viewer``: its live 3D view is open now."""
     race_id = snapshot.id
     return RaceDetailOut(
         **summary_view(snapshot).model_dump(),

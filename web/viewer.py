@@ -25,6 +25,9 @@ log = logging.getLogger(__name__)
 VISER_SUBPROTOCOL = f"viser-v{viser.__version__}"
 CLOSE_UPSTREAM_UNAVAILABLE = 1011  # the race's viser server could not be reached
 CLOSE_UNKNOWN_RACE = 4404  # used by web.routes for races without a viewer
+# [s] before that close: viser's client reconnects at once after any close, so an open tab of a race whose scene
+# is gone would otherwise reconnect tens of times a second until viewer-live.js replaces the page
+UNKNOWN_RACE_CLOSE_DELAY_S = 2.0
 
 
 @functools.cache

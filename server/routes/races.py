@@ -84,7 +84,13 @@ def race_config(body: RaceIn, catalogue: Mapping[str, ControllerSpec], max_laps:
 
 
 def _viewer(races: LiveRaces) -> bool:
+    """Whether this server opens a 3D view for its races."""
     return races.services.scene_factory is not None
+
+
+def _viewer_open(races: LiveRaces, race_id: str) -> bool:
+    """Whether the race's live 3D view is open now (it closes ``keep_finished_s`` after the race ends)."""
+    return races.scene_port(race_id) is not None
 
 
 async def _stored_or_404(races: LiveRaces, race_id: str) -> StoredRace:
@@ -136,7 +142,7 @@ async def get_race(race_id: str, races: Races) -> RaceDetailOut:
     """One race: its settings, standings, drivers' faults and tick timing."""
     session = races.get(race_id)
     snapshot = session.snapshot() if session is not None else (await _stored_or_404(races, race_id)).snapshot()
-    return detail_view(snapshot, _viewer(races))
+    return detail_view(snapshot, _viewer_open(races, race_id))
 
 
 @router.post(
@@ -153,7 +159,7 @@ async def stop_race(race_id: str, races: Races) -> RaceDetailOut:
     if not session.stop():
         raise HTTPException(status.HTTP_409_CONFLICT, f"race {race_id} is already over ({session.status.value})")
     await session.wait_status(OVER_STATUSES)
-    return detail_view(session.snapshot(), _viewer(races))
+    return detail_view(session.snapshot(), _viewer_open(races, race_id))
 
 
 @router.get("/races/{race_id}/ticks", response_model=TicksOut, responses={404: {"description": "no such race"}})

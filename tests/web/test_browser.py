@@ -1,4 +1,5 @@
-"""One real-browser test: Debian's chromium (driven by Playwright) opens the start page and a live race viewer.
+"""Real-browser tests: Debian's chromium (driven by Playwright) opens the start page and a live race viewer, a
+finished race's viewer URL (it settles: no page reloading itself), the API docs offline and the tournament pages.
 
 Through the real server (``server.app.create_app`` under uvicorn, a temporary database): ``POST /api/races``
 (MCTS-LQNG vs Fixed-LQNG on the oval), then the start page must list the race, and the viewer must connect, show
@@ -6,7 +7,8 @@ both karts moving and the green waypoint boxes of the planners, and its "Follow"
 chase a kart. No request may leave the machine.
 
 viser's client exposes its three.js scene to tests (``window.__viserMutable.nodeRefFromName[name]``, viser
-1.1.x). Screenshots go to ``test-artifacts/viewer.png`` (overview) and ``test-artifacts/viewer-follow.png``.
+1.1.x). Screenshots go to ``test-artifacts/viewer.png`` (overview) and ``test-artifacts/viewer-follow.png``; the
+ones the README shows also go to ``docs/screenshots/``.
 Skipped only when no chromium binary is installed (``scripts/install_browser.sh`` installs Debian's;
 ``playwright install`` needs the internet).
 """
@@ -22,13 +24,14 @@ from typing import TYPE_CHECKING
 
 import httpx
 import pytest
-from support.live_server import LiveServer, ServerThread, server_settings
+from support.live_server import LiveServer, ServerThread, server_settings, wait_for
 
 if TYPE_CHECKING:
     from playwright.sync_api import Page
 
 ROOT = Path(__file__).resolve().parents[2]
 ARTIFACTS = ROOT / "test-artifacts"
+SCREENSHOTS = ROOT / "docs" / "screenshots"  # the README's pictures, refreshed by every run of these tests
 CHROMIUM_CANDIDATES = (
     os.environ.get("KARTING_CHROMIUM", ""),
     "/usr/bin/chromium",
@@ -302,3 +305,132 @@ def test_tournament_pages_in_a_real_browser(tournament_server: str) -> None:
         finally:
             browser.close()
     assert not outside, f"requests left the machine: {outside[:5]}"
+
+
+# ---------------------------------------------------------------------------------------------- after the race
+SETTLE_S = 10.0  # [s] a finished race's viewer URL is watched this long
+MAX_REQUESTS_WHILE_SETTLED = 25  # in SETTLE_S: a page and its assets, a few polls; a reload loop makes hundreds
+
+
+class Traffic:
+    """Page loads, requests (with their hosts) and websockets of a Playwright page, counted from :meth:`reset`."""
+
+    def __init__(self, page: Page) -> None:
+        self.loads = 0
+        self.requests: list[str] = []
+        self.websockets = 0
+        page.on("load", lambda: self._add_load())
+        page.on("request", lambda r: self.requests.append(r.url))
+        page.on("websocket", lambda _ws: self._add_websocket())
+
+    def _add_load(self) -> None:
+        self.loads += 1
+
+    def _add_websocket(self) -> None:
+        self.websockets += 1
+
+    def reset(self) -> None:
+        """Count from now."""
+        self.loads, self.requests, self.websockets = 0, [], 0
+
+    def summary(self) -> str:
+        """What was counted, for assertion messages."""
+        return f"{self.loads} loads, {len(self.requests)} requests, {self.websockets} websockets: {self.requests[:8]}"
+
+
+@pytest.fixture(scope="module")
+def short_lived_race(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, str]]:
+    """(base URL, race id) of a one-lap race of two lane followers on a server with 3D views that drops a
+    finished race's scene 2 s after its end (``keep_finished_s``; 60 s by default) and races 10 times real time."""
+    db = tmp_path_factory.mktemp("browser-finished") / "karting.db"
+    settings = server_settings(db, viewer_enabled=True, keep_finished_s=2.0, speedup=10.0)
+    with LiveServer(settings) as server:
+        body = {"track": "oval", "laps": 1, "karts": [{"controller": "lane-follower"}, {"controller": "lane-follower"}]}
+        response = httpx.post(f"{server.url}/api/races", json=body, timeout=60)
+        assert response.status_code == 201, response.text
+        yield server.url, str(response.json()["id"])
+
+
+def _scene_dropped(base: str, race_id: str) -> bool:
+    race = httpx.get(f"{base}/api/races/{race_id}", timeout=30).json()
+    return race["status"] == "finished" and race["viewer_url"] is None
+
+
+def _check_the_race_over_page(page: Page, race_id: str) -> None:
+    card = page.locator("#race-over")
+    card.wait_for()
+    assert "finished" in card.inner_text()
+    assert page.locator("#result-link").get_attribute("href") == f"/api/races/{race_id}/result"
+    assert page.locator("#replay-link").get_attribute("href") == f"/races/{race_id}/replay"
+    page.wait_for_function("() => document.getElementById('winner').textContent.startsWith('Winner: ')")
+
+
+def test_a_finished_races_viewer_settles(short_lived_race: tuple[str, str]) -> None:
+    """A viewer tab open when the race's scene closes stops reconnecting and shows the "race over" page; opening
+    the viewer URL after that shows the same page at once: at most 2 page loads and a bounded number of
+    requests in 10 s either way (the wait page used to reload itself about 19 times a second)."""
+    from playwright.sync_api import sync_playwright
+
+    base, race_id = short_lived_race
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium_binary(), args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 1024, "height": 640})
+            page.set_default_timeout(60_000)
+            traffic = Traffic(page)
+            page.goto(f"{base}/races/{race_id}/viewer/")  # the viser page, or the wait page while it starts
+            wait_for(lambda: _scene_dropped(base, race_id), 90, 0.2)
+            traffic.reset()
+            page.wait_for_timeout(SETTLE_S * 1000)
+            assert traffic.loads <= 2, traffic.summary()
+            assert len(traffic.requests) <= MAX_REQUESTS_WHILE_SETTLED, traffic.summary()
+            assert traffic.websockets <= 5, traffic.summary()  # viser's reconnecting, slowed and then stopped
+            _check_the_race_over_page(page, race_id)
+
+            # long after the end: a fresh visit settles on its first load
+            traffic.reset()
+            page.goto(f"{base}/races/{race_id}/viewer/")
+            page.wait_for_timeout(SETTLE_S * 1000)
+            assert traffic.loads <= 2 and traffic.websockets == 0, traffic.summary()
+            assert len(traffic.requests) <= MAX_REQUESTS_WHILE_SETTLED, traffic.summary()
+            _check_the_race_over_page(page, race_id)
+
+            unknown = page.goto(f"{base}/races/no-such-race/viewer/")
+            assert unknown is not None and unknown.status == 404
+            assert "No race" in page.locator("h2").inner_text()
+        finally:
+            browser.close()
+
+
+def test_the_api_docs_render_offline(short_lived_race: tuple[str, str]) -> None:
+    """/docs (Swagger UI) and /redoc (ReDoc) render the API's operations from assets the app serves: every
+    request the browser makes is recorded by route interception, and none may leave 127.0.0.1."""
+    from playwright.sync_api import Route, sync_playwright
+
+    base, _race_id = short_lived_race
+    hosts: list[str] = []
+
+    def record(route: Route) -> None:
+        host = httpx.URL(route.request.url).host or route.request.url.split(":", 1)[0]
+        hosts.append(host)
+        if host == "127.0.0.1" or route.request.url.startswith(("data:", "blob:")):
+            route.continue_()
+        else:
+            route.abort()
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium_binary(), args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 1280, "height": 900})
+            page.set_default_timeout(60_000)
+            page.route("**/*", record)
+            page.goto(f"{base}/docs")
+            page.locator(".opblock").first.wait_for()
+            paths = page.locator(".opblock-summary-path").all_inner_texts()
+            assert "/api/races" in paths and "/api/races/{race_id}/result" in paths, paths
+            page.goto(f"{base}/redoc")
+            page.get_by_text("Start a race", exact=False).first.wait_for()
+            assert page.locator("[data-section-id^='operation/']").count() >= 5
+        finally:
+            browser.close()
+    assert hosts and set(hosts) <= {"127.0.0.1"}, f"requests left 127.0.0.1: {sorted(set(hosts))}"
