@@ -13,13 +13,18 @@ from web.frame import KART_COLORS, KartFrame, RaceFrame
 from web.meshes import CHECKPOINT_COLOR, PREDICTION_COLOR, WAYPOINT_COLOR
 
 _MARKDOWN_ESCAPES = str.maketrans({c: "\\" + c for c in "\\`*_[]|#!~"})
-_TABLE_HEAD = "| kart | pos | lap | km/h | fault | illegal LC | drv. faults |\n|---|---|---|---|---|---|---|\n"
+_TABLE_HEAD = "| kart | pos | lap | km/h | at fault | illegal LC | ctrl faults |\n|---|---|---|---|---|---|---|\n"
 
 
 def markdown_text(text: str) -> str:
     """``text`` as literal markdown text: HTML and markdown syntax escaped (viser renders raw HTML unsanitised,
     and display names come from users)."""
     return html.escape(text.translate(_MARKDOWN_ESCAPES), quote=False)
+
+
+def laps_text(laps: int) -> str:
+    """``"1 lap"``, ``"3 laps"``."""
+    return f"{laps} lap" if laps == 1 else f"{laps} laps"
 
 
 def _swatch(index: int) -> str:
@@ -46,9 +51,8 @@ def hud_text(track_name: str, karts: Sequence[tuple[str, str]], frame: RaceFrame
                 f"{k.speed * 3.6:.0f} | {k.collisions_at_fault} | {k.illegal_lane_changes} | "
                 f"{k.controller_faults} |"
             )
-        head = (
-            f"**{markdown_text(frame.track)}** · {markdown_text(frame.status)} · {frame.time:.1f} s · {frame.laps} laps"
-        )
+        track, status = markdown_text(frame.track), markdown_text(frame.status)
+        head = f"**{track}** · {status} · {frame.time:.1f} s · {laps_text(frame.laps)}"
     return head + "\n\n" + _TABLE_HEAD + "\n".join(rows)
 
 
@@ -63,6 +67,6 @@ def legend_text() -> str:
         )
     )
     return (
-        f"{legend}<br/>fault: collisions at fault · illegal LC: illegal lane changes · "
-        "drv. faults: driver errors and missed deadlines"
+        f"{legend}<br/>at fault: collisions at fault · illegal LC: illegal lane changes · "
+        "ctrl faults: controller faults (errors, hangs, missed deadlines, failed plans)"
     )

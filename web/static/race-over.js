@@ -8,8 +8,8 @@
   const line = document.getElementById("winner");
   try {
     const result = await fetchJSON(`/api/races/${encodeURIComponent(raceId)}/result`);
-    const winner = (result.karts || []).find((k) => k.kart === result.winner || k.index === result.winner);
-    line.textContent = winner ? `Winner: ${winner.name} (${winner.controller})` : "Nobody finished.";
+    const winner = (result.karts || []).find((k) => k.index === result.winner);
+    line.textContent = winner ? `Winner: ${kartLabel(winner.name, winner.controller)}` : "Nobody finished.";
   } catch (error) {
     line.textContent = error.status === 409 ? "This race has no result." : "";
   }
