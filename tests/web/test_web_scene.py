@@ -429,3 +429,15 @@ def test_relay_passes_version_mismatch_and_scene_close(relay_app: tuple[ServerTh
     while any(name.startswith("viewer-relay") for name in server.task_names()):
         assert time.monotonic() < deadline, "relay tasks leaked after viser stopped"
         time.sleep(0.05)
+
+
+def test_labels_name_the_controller_once_and_the_hud_says_which_faults() -> None:
+    from web.frame import kart_label
+    from web.hud import hud_text, laps_text, legend_text
+
+    assert kart_label("mcts-lqng 1", "mcts-lqng") == "mcts-lqng 1"
+    assert kart_label("Alice", "human") == "Alice (human)"
+    assert (laps_text(1), laps_text(3)) == ("1 lap", "3 laps")
+    table = hud_text("oval", [("A", "lane-follower")], None)
+    assert "| at fault | illegal LC | ctrl faults |" in table
+    assert "collisions at fault" in legend_text() and "controller faults" in legend_text()
