@@ -49,6 +49,14 @@ CHROMIUM_ARGS = [
 ]
 
 
+def readme_screenshot(page: Page, name: str, *, full_page: bool = False) -> None:
+    """A screenshot into ``test-artifacts/`` and, for the README, ``docs/screenshots/``."""
+    ARTIFACTS.mkdir(exist_ok=True)
+    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS / name), full_page=full_page)
+    (SCREENSHOTS / name).write_bytes((ARTIFACTS / name).read_bytes())
+
+
 def chromium_binary() -> str | None:
     """The first installed chromium binary, if any."""
     return next((path for path in CHROMIUM_CANDIDATES if path and os.access(path, os.X_OK)), None)
@@ -123,6 +131,7 @@ def test_viewer_in_a_real_browser(live_race: tuple[str, str]) -> None:
             row.wait_for()
             assert "oval" in row.inner_text()
             assert row.locator(f'a[href="/races/{race_id}/viewer/"]').count() == 1
+            readme_screenshot(page, "start.png")
 
             # the viewer connects and shows the scene
             page.goto(f"{base}/races/{race_id}/viewer/")
@@ -150,7 +159,7 @@ def test_viewer_in_a_real_browser(live_race: tuple[str, str]) -> None:
             assert calls != 0, "the renderer draws nothing"
             # the canvas is nearly transparent until the environment map is ready (slow with software WebGL)
             page.wait_for_function("() => ['', '1'].includes(window.__viserMutable?.canvas?.style.opacity)")
-            page.screenshot(path=str(ARTIFACTS / "viewer.png"))
+            readme_screenshot(page, "viewer.png")
 
             # a viewer's own "Follow" dropdown: its camera then chases the kart
             page.get_by_role("combobox", name="Follow").click()
@@ -160,7 +169,7 @@ def test_viewer_in_a_real_browser(live_race: tuple[str, str]) -> None:
             page.wait_for_timeout(500)
             cameras.append(page.evaluate("() => window.__viserMutable.camera.position.toArray()"))
             assert math.dist(*cameras) > 0.5, f"the follow camera stands still: {cameras}"
-            page.screenshot(path=str(ARTIFACTS / "viewer-follow.png"))
+            readme_screenshot(page, "viewer-follow.png")
         finally:
             browser.close()
     assert not outside, f"requests left the machine: {outside[:5]}"
@@ -234,7 +243,7 @@ def _check_the_results(page: Page, base: str) -> None:
     heatmap.scroll_into_view_if_needed()
     page.wait_for_function("img => img.complete && img.naturalWidth > 100", arg=heatmap.element_handle())
     assert page.locator(".plots figure").count() == 3  # wins, safety, finish times
-    page.screenshot(path=str(ARTIFACTS / "tournament.png"), full_page=True)
+    readme_screenshot(page, "tournament.png", full_page=True)
 
 
 def _follow_a_race_link(page: Page, base: str) -> None:
@@ -386,6 +395,7 @@ def test_a_finished_races_viewer_settles(short_lived_race: tuple[str, str]) -> N
             assert len(traffic.requests) <= MAX_REQUESTS_WHILE_SETTLED, traffic.summary()
             assert traffic.websockets <= 5, traffic.summary()  # viser's reconnecting, slowed and then stopped
             _check_the_race_over_page(page, race_id)
+            readme_screenshot(page, "race-over.png")
 
             # long after the end: a fresh visit settles on its first load
             traffic.reset()
@@ -434,3 +444,32 @@ def test_the_api_docs_render_offline(short_lived_race: tuple[str, str]) -> None:
         finally:
             browser.close()
     assert hosts and set(hosts) <= {"127.0.0.1"}, f"requests left 127.0.0.1: {sorted(set(hosts))}"
+
+
+def test_the_start_page_fits_a_phone(short_lived_race: tuple[str, str]) -> None:
+    """At 390 px wide (a phone) the start page never scrolls sideways, lists the race and its form still works:
+    the form's limits are the API's (GET /api/limits)."""
+    from playwright.sync_api import sync_playwright
+
+    base, race_id = short_lived_race
+    limits = httpx.get(f"{base}/api/limits", timeout=30).json()
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium_binary(), args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 390, "height": 844})
+            page.set_default_timeout(60_000)
+            page.goto(f"{base}/")
+            page.locator(f'tr[data-race-id="{race_id}"]').wait_for()
+            page.locator("#karts input").first.wait_for()
+            widths = page.evaluate("() => [document.documentElement.scrollWidth, window.innerWidth]")
+            assert widths[0] <= widths[1], f"the page scrolls sideways: {widths}"
+            assert page.locator("#laps").get_attribute("max") == str(limits["max_laps"])
+            counts = page.locator("#n-karts option").all_inner_texts()
+            assert counts == [str(n) for n in range(limits["min_karts"], limits["max_karts"] + 1)]
+            name = page.get_by_label("name of kart 1")
+            assert name.get_attribute("maxlength") == str(limits["max_name_length"])
+            assert name.input_value() == "mcts-lqng 1"  # the API's default name
+            assert "1 lap" in page.locator(f'tr[data-race-id="{race_id}"]').inner_text()
+            readme_screenshot(page, "start-phone.png", full_page=True)
+        finally:
+            browser.close()
