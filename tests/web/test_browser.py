@@ -159,6 +159,8 @@ def test_viewer_in_a_real_browser(live_race: tuple[str, str]) -> None:
             assert calls != 0, "the renderer draws nothing"
             # the canvas is nearly transparent until the environment map is ready (slow with software WebGL)
             page.wait_for_function("() => ['', '1'].includes(window.__viserMutable?.canvas?.style.opacity)")
+            # the README's pictures without viser's "software WebGL" notice (this machine has no GPU)
+            page.add_style_tag(content="[class*='Notification-root'] { display: none !important; }")
             readme_screenshot(page, "viewer.png")
 
             # a viewer's own "Follow" dropdown: its camera then chases the kart
