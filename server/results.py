@@ -169,7 +169,7 @@ def race_record(
     karts: Sequence[KartEntry],
     faults: Sequence[DriverFaults],
     setup: RaceSetup | None = None,
-    lap_times: Sequence[Sequence[float]] | None = None,
+    lap_times: Sequence[Sequence[float]] = (),
 ) -> RaceRecord:
     """The record of a race that ended with ``status``: the referee's ``result`` with each kart's identity,
     faults and lap times (indexed by kart), and what the race was started with (``setup``)."""
@@ -181,7 +181,7 @@ def race_record(
             result.winner == r.kart,
             r,
             faults[r.kart],
-            tuple(lap_times[r.kart]) if lap_times is not None else (),
+            tuple(lap_times[r.kart]) if lap_times else (),  # none recorded: no lap times
         )
         for r in result.karts
     )

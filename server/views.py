@@ -18,7 +18,7 @@ from server.models import (
     TickStatsOut,
 )
 from server.race_config import KartEntry
-from server.results import RaceRecord
+from server.results import TIME_DIGITS, RaceRecord
 from server.snapshot import DriverState, RaceSnapshot, Standing
 from server.ticks import TickSummary
 
@@ -61,8 +61,9 @@ def created_view(snapshot: RaceSnapshot, tokens: dict[int, str], viewer: bool) -
 
 
 def standing_view(standing: Standing) -> StandingOut:
-    """One kart's place in the running order."""
-    return StandingOut(**asdict(standing))
+    """One kart's place in the running order (times to the millisecond)."""
+    finish = round(standing.finish_time, TIME_DIGITS) if standing.finish_time is not None else None
+    return StandingOut(**{**asdict(standing), "finish_time": finish})
 
 
 def driver_view(driver: DriverState) -> DriverStatusOut:
@@ -98,7 +99,7 @@ def summary_view(snapshot: RaceSnapshot) -> RaceSummaryOut:
         track=snapshot.track,
         laps=snapshot.laps,
         created_at=snapshot.created_at,
-        time=snapshot.time,
+        time=round(snapshot.time, TIME_DIGITS),
         karts=[kart_view(k) for k in snapshot.karts],
         standings=[standing_view(s) for s in snapshot.standings],
         winner=snapshot.winner,

@@ -32,22 +32,30 @@ def _swatch(index: int) -> str:
     return f'<span style="color: rgb({r}, {g}, {b})">■</span>'
 
 
+def _nowrap(text: str) -> str:
+    """``text`` kept on one line in the table (names and times wrapped mid-way in a narrow panel)."""
+    return f'<span style="white-space: nowrap">{text}</span>'
+
+
 def _lap(kart: KartFrame) -> str:
     if not kart.finished:
         return str(kart.lap)
-    return "✓ " + (f"{kart.finish_time:.2f} s" if kart.finish_time is not None else "")
+    return _nowrap("✓ " + (f"{kart.finish_time:.2f} s" if kart.finish_time is not None else ""))
 
 
 def hud_text(track_name: str, karts: Sequence[tuple[str, str]], frame: RaceFrame | None) -> str:
     """The standings table of ``frame`` (before the first frame: the grid of ``karts``, ``(name, controller)``)."""
     if frame is None:
-        rows = [f"| {_swatch(i)} {markdown_text(name)} | – | – | – | – | – | – |" for i, (name, _) in enumerate(karts)]
+        rows = [
+            f"| {_nowrap(_swatch(i) + ' ' + markdown_text(name))} | – | – | – | – | – | – |"
+            for i, (name, _) in enumerate(karts)
+        ]
         head = f"**{markdown_text(track_name)}** · waiting for the start"
     else:
         rows = []
         for k in sorted(frame.karts, key=lambda k: k.position):
             rows.append(
-                f"| {_swatch(k.index)} {markdown_text(k.name)} | {k.position} | {_lap(k)} | "
+                f"| {_nowrap(_swatch(k.index) + ' ' + markdown_text(k.name))} | {k.position} | {_lap(k)} | "
                 f"{k.speed * 3.6:.0f} | {k.collisions_at_fault} | {k.illegal_lane_changes} | "
                 f"{k.controller_faults} |"
             )
