@@ -125,6 +125,7 @@ def race(
 
 def race_result_json(outcome: RaceOutcome) -> dict[str, object]:
     """A headless race's result in the API's shape (``GET /api/races/{id}/result``) plus its wall time [s]."""
+    from controllers.race import load_any_track
     from server.limits import default_kart_name
     from server.race_config import KartEntry
     from server.results import DriverFaults, RaceSetup, race_record
@@ -135,7 +136,7 @@ def race_result_json(outcome: RaceOutcome) -> dict[str, object]:
     karts = [KartEntry(k, default_kart_name(name, k), name) for k, name in enumerate(spec.controllers)]
     setup = RaceSetup(spec.seed, spec.kart_preset, grid_lanes(len(karts), spec.start_lanes))
     status = RaceStatus.FINISHED if result.done else RaceStatus.STOPPED
-    laps = spec.laps if spec.laps is not None else max((k.laps_completed for k in result.karts), default=0)
+    laps = spec.laps if spec.laps is not None else load_any_track(spec.track).laps
     faults = [DriverFaults()] * len(karts)
     record = race_record("headless", status, spec.track, laps, result, karts, faults, setup, outcome.lap_times)
     return {**record.to_json(), "wall_seconds": round(outcome.wall_seconds, 3)}
