@@ -65,6 +65,7 @@ class FinishedRace:
     laps: int
     wall_seconds: float
     replay: dict[str, Any] | None
+    lap_times: tuple[tuple[float, ...], ...] = ()  # [s] each kart's completed laps, by kart index
 
     def figures(self, race_id: str | None = None) -> RaceFigures:
         """The race's figures for the statistics."""
@@ -110,7 +111,7 @@ def run_job(job: RaceJob, record: bool = True) -> FinishedRace:
     outcome = run_race(job.spec(), record=record, drivers=job_drivers(job))
     laps = job.laps if job.laps is not None else load_any_track(job.track).laps
     replay = asdict(outcome.replay) if outcome.replay is not None else None
-    return FinishedRace(job, outcome.result, laps, time.perf_counter() - started, replay)
+    return FinishedRace(job, outcome.result, laps, time.perf_counter() - started, replay, outcome.lap_times)
 
 
 def kart_figures(agent: str, kart: KartResult) -> KartFigures:

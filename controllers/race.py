@@ -11,6 +11,7 @@ import numpy as np
 from controllers.base import Controller, PlanningDriver, RaceContext
 from controllers.registry import make_controller
 from controllers.replay import Replay, ReplayRecorder, apply_plan_targets
+from sim_core.laps import LapTimer
 from sim_core.observation import observe
 from sim_core.params import DT, SimParams, kart_preset
 from sim_core.track_io import get_track, load_track
@@ -39,6 +40,7 @@ class RaceOutcome:
     result: RaceResult
     wall_seconds: float
     replay: Replay | None
+    lap_times: tuple[tuple[float, ...], ...] = ()  # [s] each kart's completed laps, by kart index
 
 
 def load_any_track(name: str):  # type: ignore[no-untyped-def]
@@ -85,6 +87,7 @@ def run_race(
     actions = np.zeros((1, n, 2))
     hold = [max(1, round(1.0 / (DT * d.rate_hz))) for d in drivers]
     applied = [0] * n
+    laps = LapTimer(n, track.n_checkpoints)
     t0 = time.perf_counter()
     step = 0
     while not world.done[0]:
@@ -100,9 +103,12 @@ def run_race(
                         if recorder is not None:
                             recorder.plan(step, k, driver.active_plan)
         world.step(actions)
+        laps.observe(world)
         if on_step is not None:
             on_step(world, drivers, step)
         if recorder is not None:
             recorder.record(world, actions[0])
         step += 1
-    return RaceOutcome(spec, world.result(0), time.perf_counter() - t0, None if recorder is None else recorder.replay())
+    wall = time.perf_counter() - t0
+    replay = None if recorder is None else recorder.replay()
+    return RaceOutcome(spec, world.result(0), wall, replay, laps.all_lap_times())

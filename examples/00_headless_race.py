@@ -34,12 +34,13 @@ def main() -> None:
     for kart in sorted(result.karts, key=lambda k: k.position):
         finish = f"{kart.finish_time:7.2f} s" if kart.finish_time is not None else "    DNF"
         print(
-            f"  {kart.position}. kart {kart.kart} {spec.controllers[kart.kart]:<14} {finish}  "
+            f"  {kart.position}. kart {kart.kart + 1} {spec.controllers[kart.kart]:<14} {finish}  "
             f"collisions at fault {kart.collisions_at_fault}, illegal lane changes {kart.illegal_lane_changes}, "
             f"safety score {kart.safety_score}"
         )
     winner = result.winner
-    print(f"winner: {'nobody' if winner is None else f'kart {winner} ({spec.controllers[winner]})'}")
+    # karts are numbered from 1 where people read (kart.kart is the 0-based grid slot)
+    print(f"winner: {'nobody' if winner is None else f'kart {winner + 1} ({spec.controllers[winner]})'}")
     if args.replay is not None and outcome.replay is not None:
         outcome.replay.save(args.replay)
         print(f"replay written to {args.replay}")

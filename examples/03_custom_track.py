@@ -63,7 +63,7 @@ def main() -> None:
     for kart in sorted(result.karts, key=lambda k: k.position):
         finish = f"{kart.finish_time:7.2f} s" if kart.finish_time is not None else "    DNF"
         print(
-            f"  {kart.position}. kart {kart.kart} {spec.controllers[kart.kart]:<14} {finish}  "
+            f"  {kart.position}. kart {kart.kart + 1} {spec.controllers[kart.kart]:<14} {finish}  "
             f"laps {kart.laps_completed}, wall hits {kart.wall_hits}"
         )
 

@@ -2,44 +2,59 @@
 
 Each command imports the layers it composes when it runs: ``karting tracks`` needs only :mod:`sim_core`, so it
 does not pay for loading the controllers (numba kernels) or the server (FastAPI, SQLAlchemy, viser).
+
+Karts are numbered from 1 wherever a person reads (``kart 1``); ``--json`` output uses the API's shapes, where
+``index`` is the kart's grid slot from 0 (kart number = index + 1). "at fault" counts collisions the referee
+blamed on a kart; a controller's own errors and missed deadlines are "controller faults" (the server's only).
 """
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
+from karting.output import add_row, console, error, print_json, table
 from karting.tournament_cli import app as tournament_app
+from server.limits import MAX_KARTS, MIN_KARTS
 from sim_core.track_io import TrackFormatError, builtin_track_names, get_track, import_centreline_csv, save_track
+
+if TYPE_CHECKING:
+    from controllers.race import RaceOutcome
 
 app = typer.Typer(help="HeadToHead Karting: head-to-head autonomous kart racing with rules.", no_args_is_help=True)
 app.add_typer(tournament_app, name="tournament")
-console = Console()
+
+JsonOption = Annotated[bool, typer.Option("--json", help="print one JSON object (the last line) instead of tables")]
 
 
 @app.command()
-def tracks() -> None:
-    """List the built-in tracks."""
-    table = Table(title="Built-in tracks (each also as NAME-reversed)")
-    for col in ("name", "checkpoints", "length [m]", "laps", "L", "straights", "description"):
-        table.add_column(col)
-    for name in builtin_track_names():
+def tracks(as_json: JsonOption = False) -> None:
+    """List the built-in tracks (each also driven the other way as NAME-reversed)."""
+    names = builtin_track_names()
+    if as_json:
+        print_json([get_track(n).summary() for n in [*names, *(f"{n}-reversed" for n in names)]])
+        return
+    shown = table(
+        "Built-in tracks (each also as NAME-reversed)",
+        ("name", "CPs", "length [m]", "laps", "L", "description"),
+        keys=("name",),
+        numeric=("CPs", "length [m]", "laps", "L"),
+    )
+    for name in names:
         s = get_track(name).summary()
-        table.add_row(
+        shown.add_row(
             name,
             str(s["checkpoints"]),
             str(s["length_m"]),
             str(s["laps"]),
             str(s["lane_change_limit"]),
-            str(s["straights"]),
             str(s["description"]),
         )
-    console.print(table)
+    console.print(shown)
+    console.print("CPs: checkpoints · L: lanes a kart may cross on one straight", style="dim")
 
 
 @app.command("import-track")
@@ -50,15 +65,19 @@ def import_track(
     name: Annotated[str | None, typer.Option(help="track name (default: file stem)")] = None,
     laps: Annotated[int, typer.Option(min=1)] = 3,
     lane_change_limit: Annotated[int, typer.Option(min=0)] = 4,
+    as_json: JsonOption = False,
 ) -> None:
     """Import a racetrack-database CSV centre line as a track file."""
     try:
         track = import_centreline_csv(csv_path, name=name, scale=scale, laps=laps, lane_change_limit=lane_change_limit)
     except (TrackFormatError, ValueError) as exc:
-        console.print(f"[red]error:[/red] {exc}")
+        error(str(exc))
         raise typer.Exit(2) from None
     save_track(track, out, include_centreline=True)
     s = track.summary()
+    if as_json:
+        print_json({"path": str(out), **s})
+        return
     console.print(f"wrote {out}: {s['checkpoints']} checkpoints, {s['length_m']} m, {s['straights']} straights")
 
 
@@ -74,59 +93,105 @@ def race(
     kart: Annotated[str, typer.Option(help="kart preset: paper or original")] = "paper",
     plan_latency: Annotated[float, typer.Option(min=0.0, help="[s] delay before a new plan applies")] = 0.1,
     replay: Annotated[Path | None, typer.Option(help="write a JSON replay (poses, inputs, plans) here")] = None,
+    as_json: JsonOption = False,
 ) -> None:
-    """Run a headless race between registered controllers and print the referee's result."""
+    """Run a headless race between registered controllers and print the referee's result (karts numbered from
+    1; --json: the API's result object, with ``winner`` and per-kart results, as the last line)."""
     from controllers.race import RaceSpec, run_race  # loaded on use (see the module docstring)
     from controllers.registry import controller_names
 
     names = tuple(n.strip() for n in karts.split(",") if n.strip())
     unknown = [n for n in names if n not in controller_names()]
-    if unknown or not 1 <= len(names) <= 8:
-        console.print(f"[red]error:[/red] give 1-8 of {controller_names()}, got {list(names)}")
+    if unknown or not MIN_KARTS <= len(names) <= MAX_KARTS:
+        error(f"give {MIN_KARTS}-{MAX_KARTS} of {controller_names()}, got {list(names)}")
         raise typer.Exit(2)
     try:
         lanes = tuple(int(x) for x in start_lanes.split(",")) if start_lanes else None
         spec = RaceSpec(track, names, laps, seed, lanes, kart, plan_latency)
         outcome = run_race(spec, record=replay is not None)
     except (TrackFormatError, KeyError, ValueError) as exc:
-        console.print(f"[red]error:[/red] {exc}")
+        error(str(exc))
         raise typer.Exit(2) from None
-    result = outcome.result
-    table = Table(title=f"{track}: {result.duration:.2f} s simulated in {outcome.wall_seconds:.2f} s")
-    for col in (
-        "kart",
-        "driver",
-        "pos",
-        "time [s]",
-        "laps",
-        "faults",
-        "illegal LC",
-        "safety",
-        "walls",
-        "Δr [m]",
-        "Δv [m/s]",
-    ):
-        table.add_column(col, justify="right")
-    for kr in sorted(result.karts, key=lambda r: r.position):
-        table.add_row(
-            str(kr.kart),
-            names[kr.kart],
-            str(kr.position),
-            f"{kr.finish_time:.2f}" if kr.finish_time is not None else "DNF",
-            str(kr.laps_completed),
-            str(kr.collisions_at_fault),
-            str(kr.illegal_lane_changes),
-            str(kr.safety_score),
-            str(kr.wall_hits),
-            "-" if kr.delta_r is None else f"{kr.delta_r:.2f}",
-            "-" if kr.delta_v is None else f"{kr.delta_v:.2f}",
-        )
-    console.print(table)
-    winner = f"kart {result.winner} ({names[result.winner]})" if result.winner is not None else "nobody (no finisher)"
-    console.print(f"winner: {winner}")
+    record = race_result_json(outcome)
     if replay is not None and outcome.replay is not None:
         outcome.replay.save(replay)
+    if as_json:
+        print_json(record)
+        return
+    _print_race(track, outcome.wall_seconds, record)
+    if replay is not None:
         console.print(f"replay written to {replay}")
+
+
+def race_result_json(outcome: RaceOutcome) -> dict[str, object]:
+    """A headless race's result in the API's shape (``GET /api/races/{id}/result``) plus its wall time [s]."""
+    from controllers.race import load_any_track
+    from server.limits import default_kart_name
+    from server.race_config import KartEntry
+    from server.results import DriverFaults, RaceSetup, race_record
+    from server.status import RaceStatus
+    from sim_core.world import grid_lanes
+
+    spec, result = outcome.spec, outcome.result
+    karts = [KartEntry(k, default_kart_name(name, k), name) for k, name in enumerate(spec.controllers)]
+    setup = RaceSetup(spec.seed, spec.kart_preset, grid_lanes(len(karts), spec.start_lanes))
+    status = RaceStatus.FINISHED if result.done else RaceStatus.STOPPED
+    laps = spec.laps if spec.laps is not None else load_any_track(spec.track).laps
+    faults = [DriverFaults()] * len(karts)
+    record = race_record("headless", status, spec.track, laps, result, karts, faults, setup, outcome.lap_times)
+    return {**record.to_json(), "wall_seconds": round(outcome.wall_seconds, 3)}
+
+
+def _print_race(track: str, wall_seconds: float, record: dict[str, Any]) -> None:
+    """The result as a table, karts numbered from 1, then the winner."""
+    columns = (
+        "kart",
+        "name",
+        "pos",
+        "time\n[s]",
+        "laps",
+        "at\nfault",
+        "illegal\nLC",
+        "safety",
+        "walls",
+        "Δr\n[m]",
+        "Δv\n[m/s]",
+    )
+    shown = table(
+        f"{track}: {record['duration']:.2f} s simulated in {wall_seconds:.2f} s",
+        columns,
+        keys=("name",),
+        numeric=tuple(c for c in columns if c != "name"),
+    )
+    for k in sorted(record["karts"], key=lambda k: k["position"]):
+        add_row(
+            shown,
+            str(k["index"] + 1),
+            k["name"],
+            str(k["position"]),
+            f"{k['finish_time']:.3f}" if k["finish_time"] is not None else "DNF",
+            str(k["laps"]),
+            str(k["collisions_at_fault"]),
+            str(k["illegal_lane_changes"]),
+            str(k["safety_score"]),
+            str(k["wall_hits"]),
+            "-" if k["delta_r"] is None else f"{k['delta_r']:.2f}",
+            "-" if k["delta_v"] is None else f"{k['delta_v']:.2f}",
+        )
+    console.print(shown)
+    console.print(
+        "at fault: collisions at fault · illegal LC: illegal lane changes · safety = at fault + illegal LC "
+        "(lower is safer) · Δr, Δv: mean distance from the planned lane and speed at checkpoints",
+        style="dim",
+    )
+    for k in record["karts"]:
+        laps = ", ".join(f"{t:.3f}" for t in k["lap_times"]) or "none"
+        console.print(f"kart {k['index'] + 1} lap times \\[s]: {laps}", soft_wrap=True)
+    winner = record["winner"]
+    if winner is None:
+        console.print("winner: nobody (no finisher)")
+    else:
+        console.print(f"winner: kart {winner + 1} ({record['karts'][winner]['name']})")
 
 
 @app.command()
@@ -176,6 +241,7 @@ def train(
     fine_tune_from: Annotated[
         Path | None, typer.Option(help="start from this trained folder (fresh step count and schedule)")
     ] = None,
+    as_json: JsonOption = False,
 ) -> None:
     """Train an RL agent by PPO self-play on the training ovals (progress bar, checkpoints, log and curves)."""
     from dataclasses import replace
@@ -203,7 +269,18 @@ def train(
     if near_wall_spawns is not None:
         env = replace(env, near_wall_probability=near_wall_spawns)
     env = replace(env, near_wall_heading=math.radians(near_wall_heading_deg))
-    result = run_training(env, ppo, folder, resume=resume, progress_bar=True, fine_tune_from=fine_tune_from)
+    result = run_training(env, ppo, folder, resume=resume, progress_bar=not as_json, fine_tune_from=fine_tune_from)
+    if as_json:
+        print_json(
+            {
+                "agent": kind,
+                "timesteps": result.timesteps,
+                "wall_s": round(result.wall_s, 3),
+                "env_steps_per_s": round(result.env_steps_per_s, 1),
+                "out": str(result.out),
+            }
+        )
+        return
     console.print(
         f"{kind}: {result.timesteps} steps in {result.wall_s:.0f} s ({result.env_steps_per_s:,.0f} env steps/s); "
         f"model, statistics, log and curves in {result.out}"

@@ -9,22 +9,22 @@ original implementation's logs) and write a report.
 
 from __future__ import annotations
 
-import json
 import uuid
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, cast
 
 import typer
-from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-from rich.table import Table
+
+from karting.output import add_row, console, error, print_json
+from karting.output import table as make_table
 
 if TYPE_CHECKING:
     from arena.stats import TournamentStats
     from server.tournament_db import TournamentDatabase
 
 app = typer.Typer(help="Round-robin tournaments: run, statistics, reports.", no_args_is_help=True)
-console = Console()
+JsonOption = Annotated[bool, typer.Option("--json", help="print one JSON object (the last line) instead of tables")]
 
 DbOption = Annotated[str, typer.Option(help="SQLite file or database URL (the server's: ./karting.db)")]
 
@@ -60,6 +60,7 @@ def run(
     ] = None,
     db: DbOption = "karting.db",
     replays: Annotated[bool, typer.Option(help="store every race's replay")] = True,
+    as_json: JsonOption = False,
 ) -> None:
     """Run a round-robin tournament, storing every race as it finishes (run it again with the same --id to
     resume an interrupted one)."""
@@ -73,14 +74,14 @@ def run(
         problems["backend"] = f"unknown backend {backend!r}; known: {list(BACKENDS)}"
     if problems:
         for name, message in problems.items():
-            console.print(f"[red]error:[/red] {name}: {message}")
+            error(f"{name}: {message}")
         raise typer.Exit(2)
     store = open_tournaments(db)
     tid = tournament_id or f"t{uuid.uuid4().hex[:10]}"
     try:
         stored = store.create(tid, spec)
     except ValueError as exc:
-        console.print(f"[red]error:[/red] {exc}")
+        error(str(exc))
         raise typer.Exit(2) from None
     console.print(f"tournament [bold]{tid}[/bold]: {spec.total} races, {stored.done} stored already ({db})")
     columns = (
@@ -117,7 +118,11 @@ def run(
             store.set_status(tid, TournamentStatus.FAILED, repr(exc)[:2000])
             raise
     store.set_status(tid, TournamentStatus.FINISHED)
-    _print_wins(_stats_of(store, tid))
+    result = _stats_of(store, tid)
+    if as_json:
+        print_json({"id": tid, **result.to_json()})
+        return
+    _print_wins(result)
     console.print(f"done: karting tournament report {tid} --db {db}")
 
 
@@ -125,11 +130,11 @@ def _stats_of(store: TournamentDatabase, tournament_id: str) -> TournamentStats:
     from arena.stats import tournament_stats
 
     if store.get(tournament_id) is None:
-        console.print(f"[red]error:[/red] no tournament {tournament_id!r}")
+        error(f"no tournament {tournament_id!r}")
         raise typer.Exit(2)
     races = store.figures(tournament_id)
     if not races:
-        console.print(f"[red]error:[/red] tournament {tournament_id!r} has no finished race yet")
+        error(f"tournament {tournament_id!r} has no finished race yet")
         raise typer.Exit(2)
     return tournament_stats(races)
 
@@ -148,13 +153,12 @@ def _print_wins(stats: TournamentStats) -> None:
             for row in safety_rows(table)[1:]
         ]
         rule = table.agent_stats[table.agents[0]].illegal_lane_changes.rule
-        header = ["agent", "collisions at fault", f"illegal lane changes ({rule})", "safety score", "finished"]
+        header = ["agent", "collisions\nat fault", f"illegal lane\nchanges ({rule})", "safety\nscore", "finished"]
         for title, rows in ((f"wins ({track})", wins), (f"safety ({track}): mean (std)", [header, *safety])):
-            shown = Table(title=title)
-            for column in rows[0]:
-                shown.add_column(column, justify="right")
+            columns = [column.replace("vs ", "vs\n") for column in rows[0]]
+            shown = make_table(title, columns, keys=columns[:1], numeric=columns[1:])
             for row in rows[1:]:
-                shown.add_row(*row)
+                add_row(shown, *(str(cell) for cell in row))
             console.print(shown)
 
 
@@ -172,19 +176,19 @@ def stats(
     from arena.stats import tournament_stats
 
     if (tournament_id is None) == (original_logs is None):
-        console.print("[red]error:[/red] give exactly one of --id and --original-logs")
+        error("give exactly one of --id and --original-logs")
         raise typer.Exit(2)
     if original_logs is not None:
         try:
             result = tournament_stats(read_original_logs(original_logs))
         except (OSError, ValueError) as exc:
-            console.print(f"[red]error:[/red] {exc}")
+            error(str(exc))
             raise typer.Exit(2) from None
     else:
         assert tournament_id is not None
         result = _stats_of(open_tournaments(db), tournament_id)
     if as_json:
-        print(json.dumps(result.to_json()))
+        print_json(result.to_json())
     else:
         _print_wins(result)
 
@@ -194,6 +198,7 @@ def report(
     tournament_id: Annotated[str, typer.Argument(help="a stored tournament")],
     out: Annotated[Path | None, typer.Option(help="output folder (default results/tournaments/ID)")] = None,
     db: DbOption = "karting.db",
+    as_json: JsonOption = False,
 ) -> None:
     """Write a tournament's report: Markdown, CSV and JSON tables like the paper's, and PNG plots."""
     from arena.report import write_report
@@ -205,4 +210,7 @@ def report(
     folder = out or Path("results") / "tournaments" / tournament_id
     title = f"Tournament {tournament_id} ({stored.done}/{stored.total} races, {stored.status.value})"
     files = write_report(result, store.figures(tournament_id), folder, title)
+    if as_json:
+        print_json({"id": tournament_id, "folder": str(folder), "files": [str(f) for f in files]})
+        return
     console.print(f"wrote {len(files)} files to {folder}")

@@ -10,9 +10,12 @@ import gc
 import logging
 import sys
 from collections.abc import AsyncIterator, Callable, Mapping
-from contextlib import asynccontextmanager
+from contextlib import AbstractAsyncContextManager, asynccontextmanager
 
 from fastapi import APIRouter, FastAPI
+from fastapi.openapi.docs import get_redoc_html
+from fastapi.responses import HTMLResponse
+from fastapi_offline import FastAPIOffline
 
 from controllers.registry import REGISTRY, ControllerSpec
 from server.db import RaceDatabase
@@ -92,12 +95,55 @@ def _replay_scenes(recorded: RecordedRaces, settings: Settings) -> ReplayScenes:
 
 def _web_router(races: Callable[[], LiveRaces], replays: StoredReplays) -> APIRouter | None:
     try:
-        from web.routes import make_web_router
+        from web.routes import RaceState, make_web_router
     except ImportError as exc:
         log.warning("no web pages: web.routes is not available (%s)", exc)
         return None
-    router: APIRouter = make_web_router(lambda race_id: races().scene_port(race_id), replays)
+
+    def race_state(race_id: str) -> RaceState | None:
+        status = races().status(race_id)
+        return RaceState(status.value, not status.live) if status is not None else None
+
+    router: APIRouter = make_web_router(lambda race_id: races().scene_port(race_id), race_state, replays)
     return router
+
+
+DOCS_ASSETS = "/docs-assets"  # where fastapi-offline serves Swagger UI's and ReDoc's files
+# ReDoc's sidebar always shows its maker's logo from a CDN (an <img>): the page forbids outside images, so it
+# makes no request off the server (the logo hides itself when it fails to load)
+REDOC_POLICY = "img-src 'self' data:"
+
+
+def _add_redoc(app: FastAPI) -> None:
+    """``GET /redoc``: ReDoc from the fastapi-offline wheel, with no request leaving the server."""
+
+    @app.get("/redoc", include_in_schema=False)
+    def redoc() -> HTMLResponse:
+        page = get_redoc_html(
+            openapi_url=app.openapi_url or "/openapi.json",
+            title=f"{app.title} - ReDoc",
+            redoc_js_url=f"{DOCS_ASSETS}/redoc.standalone.js",
+            redoc_favicon_url="data:,",
+            with_google_fonts=False,
+        )
+        page.headers["Content-Security-Policy"] = REDOC_POLICY
+        return page
+
+
+def _offline_docs_app(lifespan: Callable[[FastAPI], AbstractAsyncContextManager[None]]) -> FastAPI:
+    """The bare app, with /docs and /redoc (Swagger UI and ReDoc served from the fastapi-offline wheel: they
+    work with no internet)."""
+    app = FastAPIOffline(
+        title="HeadToHead Karting",
+        description=DESCRIPTION,
+        version="0.1.0",
+        lifespan=lifespan,
+        static_url=DOCS_ASSETS,
+        favicon_url="data:,",
+        redoc_url=None,
+    )
+    _add_redoc(app)
+    return app
 
 
 def create_app(settings: Settings | None = None, *, controllers: Mapping[str, ControllerSpec] | None = None) -> FastAPI:
@@ -152,7 +198,7 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
             sys.setswitchinterval(switch_interval)
             make_ordinary()
 
-    app = FastAPI(title="HeadToHead Karting", description=DESCRIPTION, version="0.1.0", lifespan=lifespan)
+    app = _offline_docs_app(lifespan)
     app.state.settings = settings
     app.state.tournament_plots = TournamentPlots()
     app.include_router(api_router)

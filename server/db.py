@@ -172,6 +172,12 @@ class RaceDatabase:
             row = session.get(RaceRow, race_id)
             return _stored(row) if row is not None else None
 
+    def status(self, race_id: str) -> RaceStatus | None:
+        """A race's status alone (``None``: no such race)."""
+        with Session(self.engine) as session:
+            value = session.scalar(select(RaceRow.status).where(RaceRow.id == race_id))
+        return RaceStatus(value) if value is not None else None
+
     def list(self, limit: int = 200) -> list[StoredRace]:
         """The newest ``limit`` races, newest first."""
         with Session(self.engine) as session:

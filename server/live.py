@@ -10,6 +10,7 @@ from server.db import StoredRace
 from server.race_config import RaceConfig
 from server.services import RaceServices
 from server.session import RaceSession
+from server.status import RaceStatus
 
 log = logging.getLogger(__name__)
 
@@ -41,6 +42,11 @@ class LiveRaces:
         session = self.sessions.get(race_id)
         scene = session.scene if session is not None else None
         return scene.port if scene is not None else None
+
+    def status(self, race_id: str) -> RaceStatus | None:
+        """A race's status, from memory or the database (``None``: no such race; blocking: call it in a thread)."""
+        session = self.sessions.get(race_id)
+        return session.status if session is not None else self.services.db.status(race_id)
 
     async def create(self, config: RaceConfig) -> RaceSession:
         """Store and start a race; raises :class:`TooManyRacesError` when the server is full."""

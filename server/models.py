@@ -12,13 +12,18 @@ from typing import TYPE_CHECKING, Any, Literal, get_type_hints
 
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
+from server.limits import MAX_KARTS, MAX_NAME_LENGTH, MAX_SEED, MIN_KARTS, MIN_LAPS
 from server.race_config import ParamValue
 from server.results import DriverFaults, record_name
 from server.status import RaceStatus
 from sim_core.world import KartResult
 from web.frame import KartFrame
 
-MAX_SEED = 2**31 - 1
+CONTROLLER_FAULTS_DOC = (
+    "what the kart's controller got wrong: exceptions + hangs + missed deadlines + failed plans "
+    "(not collisions: those are collisions_at_fault)"
+)
+INDEX_DOC = "the kart's grid slot from 0 (pages and the command line show kart numbers from 1: index + 1)"
 
 
 class TrackOut(BaseModel):
@@ -47,7 +52,12 @@ class KartIn(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     controller: str = Field(min_length=1, max_length=64, description="a name from GET /api/controllers")
-    name: str | None = Field(None, min_length=1, max_length=40, description="display name")
+    name: str | None = Field(
+        None,
+        min_length=1,
+        max_length=MAX_NAME_LENGTH,
+        description="display name, unique in the race (default: controller and kart number, e.g. 'mcts-lqng 1')",
+    )
     params: dict[str, ParamValue] = Field(
         default_factory=dict, description="controller parameters to change (names from GET /api/controllers)"
     )
@@ -59,17 +69,29 @@ class RaceIn(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     track: str = Field(description="a name from GET /api/tracks")
-    laps: int | None = Field(None, ge=1, description="default: the track's laps")
+    laps: int | None = Field(None, ge=MIN_LAPS, description="default: the track's laps; at most GET /api/limits")
     seed: int = Field(0, ge=0, le=MAX_SEED, description="seed of the planners")
     start_lanes: list[int] | None = Field(None, description="one start lane (1-based) per kart; default 2, 3, 1, 4")
     kart_preset: Literal["paper", "original"] = "paper"
-    karts: list[KartIn] = Field(min_length=1, max_length=8)
+    karts: list[KartIn] = Field(min_length=MIN_KARTS, max_length=MAX_KARTS)
+
+
+class LimitsOut(BaseModel):
+    """The limits of a race request (the start page's form reads them) and the default kart names."""
+
+    min_laps: int
+    max_laps: int
+    min_karts: int
+    max_karts: int
+    max_name_length: int = Field(description="[characters] of a kart's display name")
+    max_seed: int
+    default_name: str = Field(description="an unnamed kart's name: {controller} and {number} (kart number from 1)")
 
 
 class KartOut(BaseModel):
     """A kart of a race."""
 
-    index: int
+    index: int = Field(description=INDEX_DOC)
     name: str
     controller: str
     params: dict[str, ParamValue] = Field(default_factory=dict, description="controller parameters changed")
@@ -91,7 +113,9 @@ class RaceCreatedOut(BaseModel):
     seed: int
     kart_preset: str
     karts: list[CreatedKartOut]
-    viewer_url: str | None = Field(description="the 3D view (None when the server runs without it)")
+    viewer_url: str | None = Field(
+        description="the live 3D view, which opens while the race starts (None when the server runs without it)"
+    )
     telemetry_url: str = Field(description="websocket of RaceFrame messages")
     drive_tokens: dict[str, str] = Field(description="kart index -> token, human karts only")
 
@@ -100,14 +124,14 @@ class StandingOut(BaseModel):
     """One kart's place in the running order."""
 
     position: int
-    index: int
+    index: int = Field(description=INDEX_DOC)
     name: str
     controller: str
     lap: int
     checkpoints_passed: int
     finished: bool
     finish_time: float | None
-    controller_faults: int
+    controller_faults: int = Field(description=CONTROLLER_FAULTS_DOC)
 
 
 class TickStatsOut(BaseModel):
@@ -127,10 +151,10 @@ class TickStatsOut(BaseModel):
 class DriverStatusOut(BaseModel):
     """A kart's driver and its faults."""
 
-    index: int
+    index: int = Field(description=INDEX_DOC)
     name: str
     controller: str
-    controller_faults: int = Field(description="exceptions + hangs + missed deadlines + failed plans")
+    controller_faults: int = Field(description=CONTROLLER_FAULTS_DOC)
     exceptions: int
     hangs: int
     missed_deadlines: int
@@ -166,8 +190,9 @@ class RaceDetailOut(RaceSummaryOut):
     drivers: list[DriverStatusOut]
     tick_stats: TickStatsOut | None
     viewer_url: str | None = Field(
-        description="the 3D view: the live view while the race is live, the replay player once it is over "
-        "(None when the server runs without 3D views or the race left nothing to replay)"
+        description="the 3D view: the live view while the race is live and its scene is open, the replay player "
+        "once it is over (None when the server runs without 3D views, while a live race has no scene open, or when "
+        "the race left nothing to replay)"
     )
     page_url: str = Field(description="the race's page (standings, laps, charts, incidents)")
     telemetry_url: str
@@ -188,7 +213,9 @@ class TicksOut(BaseModel):
 _REFEREE_DOCS = {
     "finish_time": "[s]",
     "laps": "laps completed",
-    "safety_score": "collisions at fault + illegal lane changes",
+    "safety_score": "collisions at fault + illegal lane changes (lower is safer)",
+    "collisions_at_fault": "collisions the referee blamed on this kart (not controller_faults)",
+    "index": INDEX_DOC,
     "delta_r": "[m] mean distance from the planned lane at checkpoints",
     "delta_v": "[m/s] mean difference from the planned speed at checkpoints",
 }
@@ -197,17 +224,22 @@ _REFEREE_DOCS = {
 def _kart_result_fields() -> dict[str, Any]:
     """``create_model`` fields of a kart's result: identity, the referee's fields (None where a record of an
     older version lacks one), the faults."""
-    out: dict[str, Any] = {"index": (int, ...), "name": (str, ...), "controller": (str, ...)}
+    out: dict[str, Any] = {
+        "index": (int, Field(description=INDEX_DOC)),
+        "name": (str, ...),
+        "controller": (str, ...),
+    }
     hints = get_type_hints(KartResult)
     for f in fields(KartResult):
         name = record_name(f.name)
         if name not in out:
             out[name] = (hints[f.name] | None, Field(None, description=_REFEREE_DOCS.get(name)))
+    out["lap_times"] = (list[float], Field(default_factory=list, description="[s] each completed lap's time"))
     out["winner"] = (bool, ...)
     hints = get_type_hints(DriverFaults)
     for f in fields(DriverFaults):
         out[f.name] = (hints[f.name], f.default)
-    out["controller_faults"] = (int, Field(description="exceptions + hangs + missed deadlines + failed plans"))
+    out["controller_faults"] = (int, Field(description=CONTROLLER_FAULTS_DOC))
     return out
 
 
@@ -231,8 +263,11 @@ class ResultOut(BaseModel):
     status: RaceStatus
     track: str
     laps: int
-    duration: float = Field(description="[s] race time")
-    winner: int | None = Field(description="kart index of the fastest finisher; None if nobody finished")
+    seed: int | None = Field(None, description="seed of the planners (None: a result stored before it was kept)")
+    kart_preset: str | None = None
+    start_lanes: list[int] | None = Field(None, description="each kart's start lane, 1-based, by kart index")
+    duration: float = Field(description="[s] race time (times are rounded to the millisecond)")
+    winner: int | None = Field(description="index of the fastest finisher's kart; None if nobody finished")
     karts: list[KartResultOut]
 
 

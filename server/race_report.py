@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controllers.timeline import Crossing, Incident, RaceTimeline
+from server.results import TIME_DIGITS
 
 SECTORS = 3
 SPEED_BINS = 100  # points of the speed-along-the-lap trace per lap
@@ -77,6 +78,10 @@ class RaceReport:
     pose_error: float  # [m] re-simulated vs recorded positions (0: the figures are exact)
 
 
+def _ms(seconds: float) -> float:
+    return round(seconds, TIME_DIGITS)
+
+
 def sector_ends(n_checkpoints: int, sectors: int = SECTORS) -> tuple[int, ...]:
     """Checkpoints within a lap (1..N) where each of ``sectors`` sectors ends: as even as the checkpoints allow,
     the last at N. A lap with fewer checkpoints than sectors has one sector per checkpoint."""
@@ -102,19 +107,21 @@ def lap_reports(crossings: Sequence[Crossing], n_checkpoints: int, laps: int, n_
             if end is None:
                 break
             first = (lap - 1) * n_checkpoints
-            start = at[k, first].time if lap > 1 else 0.0
+            # times to the millisecond, as in the result: race times rounded first, so sectors add up to laps
+            start = _ms(at[k, first].time) if lap > 1 else 0.0
             marks = [start]
             for checkpoint in ends:
                 crossing = at.get((k, first + checkpoint))
-                marks.append(crossing.time if crossing is not None else marks[-1])
+                marks.append(_ms(crossing.time) if crossing is not None else marks[-1])
+            end_time = _ms(end.time)
             rows.append(
                 LapReport(
                     lap=lap,
-                    time=end.time - start,
-                    sectors=tuple(b - a for a, b in itertools.pairwise(marks)),
-                    end_time=end.time,
+                    time=_ms(end_time - start),
+                    sectors=tuple(_ms(b - a) for a, b in itertools.pairwise(marks)),
+                    end_time=end_time,
                     position=order[lap].index(end.time) + 1,
-                    gap=end.time - leader[lap],
+                    gap=_ms(end_time - _ms(leader[lap])),
                     wear=end.wear,
                     speed=end.speed,
                 )
@@ -147,7 +154,7 @@ def incident_reports(incidents: Sequence[Incident], timeline: RaceTimeline) -> l
     for incident in incidents:
         row = min(round(incident.time / timeline.dt), timeline.steps)
         lap = int(timeline.checkpoints_passed[row, incident.kart]) // timeline.n_checkpoints + 1
-        out.append(IncidentReport(incident.time, incident.kart, incident.kind, incident.other, lap))
+        out.append(IncidentReport(_ms(incident.time), incident.kart, incident.kind, incident.other, lap))
     return out
 
 

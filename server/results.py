@@ -3,8 +3,10 @@
 A :class:`KartRecord` holds the referee's figures as they are (:class:`sim_core.world.KartResult`, whatever
 fields it has in this version) next to the kart's identity and its controller's faults. Its JSON form is flat,
 the shape ``GET /api/races/{id}/result`` shows: the referee's fields under their own names (``kart`` is the
-kart's ``index``, ``laps_completed`` is ``laps``), the faults, and ``controller_faults``. A record stored by an
-older version loads too: a field it lacks takes the field's default, or ``None``.
+kart's ``index``, ``laps_completed`` is ``laps``), the kart's lap times, the faults, and ``controller_faults``.
+Times are written rounded to the millisecond, Δr and Δv to the millimetre (per second): the simulation's step is
+20 ms, so further digits are float noise. A record stored by an older version loads too: a field it lacks takes
+the field's default, or ``None``.
 """
 
 from __future__ import annotations
@@ -19,6 +21,15 @@ from sim_core.world import KartResult, RaceResult
 
 # KartResult field -> its name in a record (and the API), where they differ
 REFEREE_NAMES: Mapping[str, str] = {"kart": "index", "laps_completed": "laps"}
+
+
+TIME_DIGITS = 3  # [s] to the millisecond
+ROUNDED = {"finish_time": TIME_DIGITS, "delta_r": 3, "delta_v": 3}  # record field -> decimals written
+
+
+def _rounded(name: str, value: Any) -> Any:
+    digits = ROUNDED.get(name)
+    return round(value, digits) if digits is not None and isinstance(value, float) else value
 
 
 def record_name(referee_field: str) -> str:
@@ -67,15 +78,17 @@ class KartRecord:
     winner: bool
     referee: KartResult
     faults: DriverFaults
+    lap_times: tuple[float, ...] = ()  # [s] each completed lap's time
 
     def to_json(self) -> dict[str, Any]:
         """The flat JSON form (see the module docstring)."""
-        referee = {record_name(name): value for name, value in asdict(self.referee).items()}
+        referee = {record_name(name): _rounded(record_name(name), v) for name, v in asdict(self.referee).items()}
         return {
             "index": self.index,
             "name": self.name,
             "controller": self.controller,
             **referee,
+            "lap_times": [round(t, TIME_DIGITS) for t in self.lap_times],
             "winner": self.winner,
             **asdict(self.faults),
             "controller_faults": self.faults.controller_faults,
@@ -92,6 +105,7 @@ class KartRecord:
             bool(data.get("winner", False)),
             referee,
             DriverFaults.from_json(data),
+            tuple(float(t) for t in data.get("lap_times") or ()),
         )
 
 
@@ -106,6 +120,9 @@ class RaceRecord:
     duration: float  # [s] race time
     winner: int | None  # kart index of the fastest finisher; None if nobody finished
     karts: tuple[KartRecord, ...]
+    seed: int | None = None  # None: stored by a version that did not record it
+    kart_preset: str | None = None
+    start_lanes: tuple[int, ...] | None = None  # the lanes the karts started in (the defaults when none were asked)
 
     def to_json(self) -> dict[str, Any]:
         """The JSON form stored with the race (and shown by the API)."""
@@ -114,7 +131,10 @@ class RaceRecord:
             "status": self.status.value,
             "track": self.track,
             "laps": self.laps,
-            "duration": self.duration,
+            "seed": self.seed,
+            "kart_preset": self.kart_preset,
+            "start_lanes": list(self.start_lanes) if self.start_lanes is not None else None,
+            "duration": round(self.duration, TIME_DIGITS),
             "winner": self.winner,
             "karts": [kart.to_json() for kart in self.karts],
         }
@@ -130,6 +150,9 @@ class RaceRecord:
             float(data["duration"]),
             data.get("winner"),
             tuple(KartRecord.from_json(kart) for kart in data["karts"]),
+            data.get("seed"),
+            data.get("kart_preset"),
+            tuple(data["start_lanes"]) if data.get("start_lanes") is not None else None,
         )
 
     def kart(self, index: int) -> KartRecord | None:
@@ -145,11 +168,31 @@ def race_record(
     result: RaceResult,
     karts: Sequence[KartEntry],
     faults: Sequence[DriverFaults],
+    setup: RaceSetup | None = None,
+    lap_times: Sequence[Sequence[float]] = (),
 ) -> RaceRecord:
-    """The record of a race that ended with ``status``: the referee's ``result`` with each kart's identity and
-    faults (both indexed by kart)."""
+    """The record of a race that ended with ``status``: the referee's ``result`` with each kart's identity,
+    faults and lap times (indexed by kart), and what the race was started with (``setup``)."""
     records = tuple(
-        KartRecord(r.kart, karts[r.kart].name, karts[r.kart].controller, result.winner == r.kart, r, faults[r.kart])
+        KartRecord(
+            r.kart,
+            karts[r.kart].name,
+            karts[r.kart].controller,
+            result.winner == r.kart,
+            r,
+            faults[r.kart],
+            tuple(lap_times[r.kart]) if lap_times else (),  # none recorded: no lap times
+        )
         for r in result.karts
     )
-    return RaceRecord(race_id, status, track, laps, result.duration, result.winner, records)
+    seed, preset, lanes = (setup.seed, setup.kart_preset, setup.start_lanes) if setup is not None else (None,) * 3
+    return RaceRecord(race_id, status, track, laps, result.duration, result.winner, records, seed, preset, lanes)
+
+
+@dataclass(frozen=True)
+class RaceSetup:
+    """What a race was started with, besides its track and karts: as its result records it."""
+
+    seed: int
+    kart_preset: str
+    start_lanes: tuple[int, ...]  # every kart's start lane (the defaults when none were asked)

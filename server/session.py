@@ -36,15 +36,16 @@ from server.frames import TelemetryMessage, build_frame, replay_json
 from server.host_messages import PlannerSetup
 from server.plan_requests import PlanRequests
 from server.race_config import KartEntry, RaceConfig
-from server.results import RaceRecord, race_record
+from server.results import RaceRecord, RaceSetup, race_record
 from server.services import RaceServices, Scene
 from server.snapshot import DriverState, RaceSnapshot, Standing
 from server.status import RaceStatus
 from server.ticks import TickSchedule, TickSummary, sleep_until, spread_start
 from sim_core import state as st
+from sim_core.laps import LapTimer
 from sim_core.observation import Observation, observe
 from sim_core.params import DT, SimParams, kart_preset
-from sim_core.world import World
+from sim_core.world import World, grid_lanes
 from web.frame import RaceFrame
 
 log = logging.getLogger(__name__)
@@ -70,6 +71,7 @@ class RaceSession:
         self.scene: Scene | None = None
         self.result: RaceRecord | None = None
         self.replay = ReplayRecorder(config.track.name, len(self.drivers))
+        self.laps = LapTimer(len(self.drivers), config.track.n_checkpoints)
         self.plans_version = 0
         self.error: str | None = None
         self._workers: dict[int, KartWorker] = {}  # AI kart -> where its controller runs
@@ -297,6 +299,7 @@ class RaceSession:
                 d.take_ai_input(latest, step, float(speeds[d.index]), settings.controller_hold_s)
             self._actions[0, d.index] = (d.steer, d.throttle)
         world.step(self._actions)
+        self.laps.observe(world)
         observations = observe(world, 0)
         self._submit(observations)
         self._plans.request(self.drivers, observations)
@@ -372,7 +375,19 @@ class RaceSession:
             config = self.config
             faults = [d.fault_record() for d in self.drivers]
             result = self.world.result(0)
-            record = race_record(self.id, status, config.track_name, config.laps, result, config.karts, faults)
+            lanes = grid_lanes(len(config.karts), config.start_lanes)
+            setup = RaceSetup(config.seed, config.kart_preset, lanes)
+            record = race_record(
+                self.id,
+                status,
+                config.track_name,
+                config.laps,
+                result,
+                config.karts,
+                faults,
+                setup,
+                self.laps.all_lap_times(),
+            )
         try:
             if record is None:
                 await asyncio.to_thread(self.services.db.set_status, self.id, status)

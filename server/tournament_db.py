@@ -21,9 +21,11 @@ from arena.race import FinishedRace, RaceJob, race_figures
 from arena.records import RaceFigures
 from arena.tournament import TournamentSpec
 from server.db import RaceDatabase, RaceRow, encode_replay, utc_now
+from server.limits import default_kart_name
 from server.race_config import KartEntry
-from server.results import DriverFaults, RaceRecord, race_record
+from server.results import DriverFaults, RaceRecord, RaceSetup, race_record
 from server.status import RaceStatus
+from sim_core.world import grid_lanes
 
 TOURNAMENT_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,23}$")  # race ids are TOURNAMENT-NNNNN (32 characters)
 
@@ -147,9 +149,11 @@ class TournamentDatabase:
         """Store a finished race (result and replay in ``races``) and its link, in one transaction."""
         job = race.job
         rid = race_id(tournament_id, job.index)
-        karts = [KartEntry(k, f"{agent} #{k + 1}", agent) for k, agent in enumerate(job.agents)]
+        karts = [KartEntry(k, default_kart_name(agent, k), agent) for k, agent in enumerate(job.agents)]
+        setup = RaceSetup(job.seed, job.kart_preset, grid_lanes(len(karts), tuple(job.start_lanes)))
+        faults = [DriverFaults()] * len(karts)
         record = race_record(
-            rid, RaceStatus.FINISHED, job.track, race.laps, race.result, karts, [DriverFaults()] * len(karts)
+            rid, RaceStatus.FINISHED, job.track, race.laps, race.result, karts, faults, setup, race.lap_times
         )
         with Session(self.db.engine) as session, session.begin():
             session.add(

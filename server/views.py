@@ -18,21 +18,26 @@ from server.models import (
     TickStatsOut,
 )
 from server.race_config import KartEntry
-from server.results import RaceRecord
+from server.results import TIME_DIGITS, RaceRecord
 from server.snapshot import DriverState, RaceSnapshot, Standing
 from server.status import RaceStatus
 from server.ticks import TickSummary
 
 
 def viewer_url(
-    race_id: str, viewer: bool, status: RaceStatus = RaceStatus.STARTING, recorded: bool = False
+    race_id: str,
+    viewer: bool,
+    status: RaceStatus = RaceStatus.STARTING,
+    recorded: bool = False,
+    open_now: bool = True,
 ) -> str | None:
-    """The race's 3D view page: the live view while the race is live, its replay player once it is over and
-    recorded (None when the server runs without 3D views, or for a race over with nothing recorded)."""
+    """The race's 3D view page: the live view while the race is live and its scene is open (``open_now``; a new
+    race's opens shortly), its replay player once it is over and recorded; None when the server runs without 3D
+    views (``viewer`` false), while a live race has no scene open, or for a race over with nothing recorded."""
     if not viewer:
         return None
     if status.live:
-        return f"/races/{race_id}/viewer/"
+        return f"/races/{race_id}/viewer/" if open_now else None
     return f"/races/{race_id}/replay/" if recorded else None
 
 
@@ -74,8 +79,9 @@ def created_view(snapshot: RaceSnapshot, tokens: dict[int, str], viewer: bool) -
 
 
 def standing_view(standing: Standing) -> StandingOut:
-    """One kart's place in the running order."""
-    return StandingOut(**asdict(standing))
+    """One kart's place in the running order (times to the millisecond)."""
+    finish = round(standing.finish_time, TIME_DIGITS) if standing.finish_time is not None else None
+    return StandingOut(**{**asdict(standing), "finish_time": finish})
 
 
 def driver_view(driver: DriverState) -> DriverStatusOut:
@@ -111,15 +117,15 @@ def summary_view(snapshot: RaceSnapshot) -> RaceSummaryOut:
         track=snapshot.track,
         laps=snapshot.laps,
         created_at=snapshot.created_at,
-        time=snapshot.time,
+        time=round(snapshot.time, TIME_DIGITS),
         karts=[kart_view(k) for k in snapshot.karts],
         standings=[standing_view(s) for s in snapshot.standings],
         winner=snapshot.winner,
     )
 
 
-def detail_view(snapshot: RaceSnapshot, viewer: bool) -> RaceDetailOut:
-    """A race in full."""
+def detail_view(snapshot: RaceSnapshot, viewer: bool, viewer_open: bool) -> RaceDetailOut:
+    """A race in full; ``viewer``: this server opens 3D views; ``viewer_open``: the race's live view is open now."""
     race_id = snapshot.id
     return RaceDetailOut(
         **summary_view(snapshot).model_dump(),
@@ -129,7 +135,7 @@ def detail_view(snapshot: RaceSnapshot, viewer: bool) -> RaceDetailOut:
         step=snapshot.step,
         drivers=[driver_view(d) for d in snapshot.drivers],
         tick_stats=tick_stats_view(snapshot.tick_stats),
-        viewer_url=viewer_url(race_id, viewer, snapshot.status, snapshot.recorded),
+        viewer_url=viewer_url(race_id, viewer, snapshot.status, snapshot.recorded, viewer_open),
         page_url=page_url(race_id),
         telemetry_url=telemetry_url(race_id),
         result_url=f"/api/races/{race_id}/result",

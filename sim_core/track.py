@@ -12,6 +12,7 @@ Conventions
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
@@ -281,7 +282,7 @@ class Track:
             laps=self.laps,
             lane_change_limit=self.lane_change_limit,
             lane_fractions=tuple(-f for f in reversed(self.lane_fractions)),
-            description=self.description,
+            description=_reversed_description(self.description),
             meta=dict(self.meta),
         )
 
@@ -297,6 +298,20 @@ class Track:
             "straights": int(self.straight_flags.sum()),
             "description": self.description,
         }
+
+
+REVERSED_PREFIX = "Driven the other way round: "
+_HANDS = {"left-hand": "right-hand", "right-hand": "left-hand"}
+
+
+def _reversed_description(description: str) -> str:
+    """The description of a track driven the other way: its corners turn the other way (a reversed track's
+    reverse gets the original description back)."""
+    if description.startswith(REVERSED_PREFIX):
+        body = description[len(REVERSED_PREFIX) :]
+    else:
+        body = REVERSED_PREFIX + description
+    return re.sub("|".join(_HANDS), lambda m: _HANDS[m.group(0)], body)
 
 
 def _reversed_name(name: str) -> str:

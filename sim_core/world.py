@@ -61,6 +61,14 @@ class RaceResult:
     done: bool
 
 
+def grid_lanes(n_karts: int, start_lanes: tuple[int, ...] | None = None) -> tuple[int, ...]:
+    """The start lane of each kart as :meth:`World.reset` places them: ``start_lanes``, or lanes 2, 3, 1, 4 in each
+    row of four."""
+    if start_lanes is not None:
+        return tuple(start_lanes)
+    return tuple(DEFAULT_START_LANES[k % len(DEFAULT_START_LANES)] for k in range(n_karts))
+
+
 class World:
     """B races x K karts on one track. Construct, :meth:`reset`, then :meth:`step` with (B, K, 2) actions.
 
@@ -168,7 +176,7 @@ class World:
             self.clear_race(b)
             for k in range(self.n_karts):
                 row, col = divmod(k, 4)
-                lane = lanes[k] if k < len(lanes) else DEFAULT_START_LANES[col]
+                lane = lanes[k] if k < len(lanes) else DEFAULT_START_LANES[col]  # as grid_lanes
                 offset = START_OFFSET - ROW_SPACING * row
                 d = float(self.track.lane_offsets(0)[lane - 1])
                 self.place_kart(b, k, s=offset, d=d, wear=start_wear)

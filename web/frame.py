@@ -22,6 +22,12 @@ KART_COLORS: tuple[tuple[int, int, int], ...] = (
 )
 
 
+def kart_label(name: str, controller: str) -> str:
+    """A kart's label: its name, with its controller in brackets unless the name already says it
+    (``"Alice (human)"``, but ``"mcts-lqng 1"`` rather than ``"mcts-lqng 1 (mcts-lqng)"``)."""
+    return name if not controller or controller in name else f"{name} ({controller})"
+
+
 @dataclass(frozen=True)
 class KartFrame:
     """One kart at one tick, with its standing, safety counts and the waypoints its planner last delivered."""

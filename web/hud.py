@@ -13,7 +13,7 @@ from web.frame import KART_COLORS, KartFrame, RaceFrame
 from web.meshes import CHECKPOINT_COLOR, PREDICTION_COLOR, WAYPOINT_COLOR
 
 _MARKDOWN_ESCAPES = str.maketrans({c: "\\" + c for c in "\\`*_[]|#!~"})
-_TABLE_HEAD = "| kart | pos | lap | km/h | fault | illegal LC | drv. faults |\n|---|---|---|---|---|---|---|\n"
+_TABLE_HEAD = "| kart | pos | lap | km/h | at fault | illegal LC | ctrl faults |\n|---|---|---|---|---|---|---|\n"
 
 
 def markdown_text(text: str) -> str:
@@ -22,33 +22,45 @@ def markdown_text(text: str) -> str:
     return html.escape(text.translate(_MARKDOWN_ESCAPES), quote=False)
 
 
+def laps_text(laps: int) -> str:
+    """``"1 lap"``, ``"3 laps"``."""
+    return f"{laps} lap" if laps == 1 else f"{laps} laps"
+
+
 def _swatch(index: int) -> str:
     r, g, b = KART_COLORS[index % len(KART_COLORS)]
     return f'<span style="color: rgb({r}, {g}, {b})">■</span>'
 
 
+def _nowrap(text: str) -> str:
+    """``text`` kept on one line in the table (names and times wrapped mid-way in a narrow panel)."""
+    return f'<span style="white-space: nowrap">{text}</span>'
+
+
 def _lap(kart: KartFrame) -> str:
     if not kart.finished:
         return str(kart.lap)
-    return "✓ " + (f"{kart.finish_time:.2f} s" if kart.finish_time is not None else "")
+    return _nowrap("✓ " + (f"{kart.finish_time:.2f} s" if kart.finish_time is not None else ""))
 
 
 def hud_text(track_name: str, karts: Sequence[tuple[str, str]], frame: RaceFrame | None) -> str:
     """The standings table of ``frame`` (before the first frame: the grid of ``karts``, ``(name, controller)``)."""
     if frame is None:
-        rows = [f"| {_swatch(i)} {markdown_text(name)} | – | – | – | – | – | – |" for i, (name, _) in enumerate(karts)]
+        rows = [
+            f"| {_nowrap(_swatch(i) + ' ' + markdown_text(name))} | – | – | – | – | – | – |"
+            for i, (name, _) in enumerate(karts)
+        ]
         head = f"**{markdown_text(track_name)}** · waiting for the start"
     else:
         rows = []
         for k in sorted(frame.karts, key=lambda k: k.position):
             rows.append(
-                f"| {_swatch(k.index)} {markdown_text(k.name)} | {k.position} | {_lap(k)} | "
+                f"| {_nowrap(_swatch(k.index) + ' ' + markdown_text(k.name))} | {k.position} | {_lap(k)} | "
                 f"{k.speed * 3.6:.0f} | {k.collisions_at_fault} | {k.illegal_lane_changes} | "
                 f"{k.controller_faults} |"
             )
-        head = (
-            f"**{markdown_text(frame.track)}** · {markdown_text(frame.status)} · {frame.time:.1f} s · {frame.laps} laps"
-        )
+        track, status = markdown_text(frame.track), markdown_text(frame.status)
+        head = f"**{track}** · {status} · {frame.time:.1f} s · {laps_text(frame.laps)}"
     return head + "\n\n" + _TABLE_HEAD + "\n".join(rows)
 
 
@@ -63,6 +75,6 @@ def legend_text() -> str:
         )
     )
     return (
-        f"{legend}<br/>fault: collisions at fault · illegal LC: illegal lane changes · "
-        "drv. faults: driver errors and missed deadlines"
+        f"{legend}<br/>at fault: collisions at fault · illegal LC: illegal lane changes · "
+        "ctrl faults: controller faults (errors, hangs, missed deadlines, failed plans)"
     )

@@ -2,16 +2,25 @@
 tournament pages.
 
 The router knows nothing about sessions: the app passes ``scene_port(race_id)``, which returns the port of the
-race's live viser server or ``None``. The pages are static HTML + vanilla JS from ``web/static/`` that talk to the
-server's JSON API (``/api/...``); nothing is loaded from outside the app.
+race's live viser server or ``None``, and ``race_state(race_id)``, which says whether the race exists and is over.
+The pages are static HTML + vanilla JS from ``web/static/`` that talk to the server's JSON API (``/api/...``);
+nothing is loaded from outside the app.
+
+A race's viewer URL answers one of three pages, so that no page reloads itself in a loop: viser's client while
+the race's scene is open; a page that waits for the scene while the race is starting (it reloads once the API
+says the view is open, at most once in 10 s); and a "race over" page, with no polling, once the scene is closed.
+The viser page gets ``viewer-live.js``, which stops viser's reconnecting and loads that "race over" page when the
+scene closes.
 """
 
 from __future__ import annotations
 
+import asyncio
 import functools
 import gzip
 import re
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
@@ -21,9 +30,11 @@ from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from web.viewer import (
     CLOSE_TRY_AGAIN_LATER,
     CLOSE_UNKNOWN_RACE,
+    UNKNOWN_RACE_CLOSE_DELAY_S,
     ViewersBusyError,
     relay_viewer,
     requested_subprotocol,
+    viewer_index_html,
     viewer_page_with,
 )
 
@@ -43,7 +54,6 @@ def _static(name: str) -> bytes:
     return (STATIC_DIR / name).read_bytes()
 
 
-LIVE_VIEWER_SCRIPT = "viewer-switch.js"  # moves a live viewer to the replay once the race is over
 REPLAY_VIEWER_SCRIPT = "replay-viewer.js"
 
 
@@ -65,24 +75,55 @@ class ReplayDirectory(Protocol):
 
 
 @functools.cache
-def _viewer_page_gzip(script: str) -> bytes:
-    return gzip.compress(viewer_page_with(script), compresslevel=6)
+def _gzipped(page: bytes) -> bytes:
+    return gzip.compress(page, compresslevel=6)
 
 
-def _viewer_page(script: str, request: Request) -> Response:
-    """viser's client page with ``script``, gzip-compressed when the browser takes it."""
+def _viser_page(page: bytes, request: Request) -> Response:
+    """A viser client ``page`` (the live view's or the replay player's), gzip-compressed when the browser takes
+    it."""
     if "gzip" in request.headers.get("accept-encoding", ""):
         return Response(
-            _viewer_page_gzip(script),
+            _gzipped(page),
             media_type="text/html; charset=utf-8",
             headers={**NO_CACHE, "Content-Encoding": "gzip", "Vary": "Accept-Encoding"},
         )
-    return Response(viewer_page_with(script), media_type="text/html; charset=utf-8", headers=NO_CACHE)
+    return Response(page, media_type="text/html; charset=utf-8", headers=NO_CACHE)
 
 
-def _not_found_page(race_id: str) -> HTMLResponse:
-    body = _static("notfound.html").decode().replace("{race_id}", _escape(race_id))
-    return HTMLResponse(body, status_code=404, headers=NO_CACHE)
+# viser's client runs its websocket in a Worker: viewer-live.js must wrap Worker before viser's module script runs
+VIEWER_LIVE_SCRIPT = b'<script src="/assets/viewer-live.js"></script>'
+
+
+@dataclass(frozen=True)
+class RaceState:
+    """What the pages need to know of a race: its status (as the API shows it) and whether it is over."""
+
+    status: str
+    over: bool
+
+
+def _page(name: str, status_code: int = 200, **values: str) -> HTMLResponse:
+    """``web/static/NAME`` with each ``{key}`` replaced by its value, HTML-escaped."""
+    body = _static(name).decode()
+    for key, value in values.items():
+        body = body.replace("{" + key + "}", _escape(value))
+    return HTMLResponse(body, status_code=status_code, headers=NO_CACHE)
+
+
+def _no_such_race(race_id: str) -> HTMLResponse:
+    return _page("notfound.html", 404, race_id=race_id)
+
+
+@functools.cache
+def live_viewer_html() -> bytes:
+    """viser's client page with ``viewer-live.js`` loaded first."""
+    html = viewer_index_html()
+    head = html.find(b"<head>")
+    if head < 0:  # not the page this was written for: load the script first all the same
+        return VIEWER_LIVE_SCRIPT + html
+    at = head + len(b"<head>")
+    return html[:at] + VIEWER_LIVE_SCRIPT + html[at:]
 
 
 def _message_page(title: str, text: str, race_id: str, status_code: int) -> HTMLResponse:
@@ -100,20 +141,38 @@ def _escape(text: str) -> str:
     return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
 
 
-def make_web_router(scene_port: Callable[[str], int | None], replays: ReplayDirectory | None = None) -> APIRouter:
+def _without_scene(race_id: str, state: RaceState | None) -> HTMLResponse:
+    """A race's viewer URL when the race has no open scene: no such race, the race is over, or it starts."""
+    if state is None:
+        return _no_such_race(race_id)
+    if state.over:
+        return _page("race-over.html", race_id=race_id, status=state.status)
+    return _page("viewer-wait.html", race_id=race_id, status=state.status)
+
+
+def make_web_router(
+    scene_port: Callable[[str], int | None],
+    race_state: Callable[[str], RaceState | None],
+    replays: ReplayDirectory | None = None,
+) -> APIRouter:
     """Routes of the web pages; ``scene_port(race_id)`` gives a race's viser port (``None``: no live viewer),
+    ``race_state(race_id)`` its state (``None``: no such race; a blocking call, made in a worker thread) and
     ``replays`` the stored races' replay scenes (``None``: no replay player).
 
     * ``GET /``: the start page (races, results, launch form);
     * ``GET /assets/{name}``: the pages' scripts and styles;
     * ``GET /races/{race_id}``: the race's page (standings, laps, charts, incidents; its script reads the API);
-    * ``GET /races/{race_id}/viewer/``: viser's client page (404 when the race has no live viewer; a race that is
-      over with a replay redirects to its replay); ``GET /races/{race_id}/viewer`` redirects there;
-    * websocket ``/races/{race_id}/viewer``: relayed to the race's viser server (closed with 4404 when unknown);
+    * ``GET /races/{race_id}/viewer/``: a race over with a stored replay redirects to its replay player; else
+      viser's client page while the race's scene is open; otherwise a page that waits for it (race starting),
+      says the race is over (with links to its result and replay) or, with 404, that there is no such race;
+      ``GET /races/{race_id}/viewer`` redirects there;
+    * websocket ``/races/{race_id}/viewer``: relayed to the race's viser server (closed with 4404 when there is
+      no scene, after :data:`~web.viewer.UNKNOWN_RACE_CLOSE_DELAY_S`, which slows viser's reconnecting);
     * ``GET /races/{race_id}/replay/``: the replay player of a stored race (its scene opened on demand; 404 when
       the race has no replay, 503 when too many replays are watched); ``GET /races/{race_id}/replay`` redirects;
     * websocket ``/races/{race_id}/replay``: relayed to the race's replay scene (4404: no replay; 1013: busy);
-    * ``GET /races/{race_id}/drive?kart=K&token=T``: the drive page (viewer + keyboard input);
+    * ``GET /races/{race_id}/drive?kart=K&token=T``: the drive page (viewer + keyboard input; 404 page for an
+      unknown race);
     * ``GET /tournaments``: the tournaments page (stored tournaments, leaderboard, launch form);
     * ``GET /tournaments/{tournament_id}``: a tournament's page (progress, races, tables and plots).
     """
@@ -143,12 +202,13 @@ def make_web_router(scene_port: Callable[[str], int | None], replays: ReplayDire
 
     @router.get("/races/{race_id}/viewer/", response_class=HTMLResponse)
     async def viewer_page(race_id: str, request: Request) -> Response:
-        """viser's client page for a race with a live viewer; the replay once the race is over."""
+        """The replay once the race is over and recorded; viser's client page for a race with a live viewer;
+        else what became of the race (see above)."""
         if replays is not None and await replays.has_replay(race_id):
             return RedirectResponse(f"/races/{race_id}/replay/", status_code=307)
         if scene_port(race_id) is None:
-            return _not_found_page(race_id)
-        return _viewer_page(LIVE_VIEWER_SCRIPT, request)
+            return _without_scene(race_id, await asyncio.to_thread(race_state, race_id))
+        return _viser_page(live_viewer_html(), request)
 
     _add_replay_routes(router, replays)
 
@@ -159,6 +219,7 @@ def make_web_router(scene_port: Callable[[str], int | None], replays: ReplayDire
         if port is None:
             # accept first: a close before the handshake becomes a bare HTTP 403 without the code and reason
             await websocket.accept(subprotocol=requested_subprotocol(websocket))
+            await asyncio.sleep(UNKNOWN_RACE_CLOSE_DELAY_S)
             await websocket.close(code=CLOSE_UNKNOWN_RACE, reason=f"no live viewer for race {race_id}"[:120])
             return
         await relay_viewer(websocket, port)
@@ -166,6 +227,8 @@ def make_web_router(scene_port: Callable[[str], int | None], replays: ReplayDire
     @router.get("/races/{race_id}/drive", response_class=HTMLResponse)
     def drive_page(race_id: str) -> Response:
         """The drive page (the race id, kart and token are read from the URL by its script)."""
+        if race_state(race_id) is None:
+            return _no_such_race(race_id)
         return HTMLResponse(_static("drive.html"), headers=NO_CACHE)
 
     @router.get("/tournaments", response_class=HTMLResponse)
@@ -203,7 +266,7 @@ def _add_replay_routes(router: APIRouter, replays: ReplayDirectory | None) -> No
                 race_id,
                 404,
             )
-        return _viewer_page(REPLAY_VIEWER_SCRIPT, request)
+        return _viser_page(viewer_page_with(REPLAY_VIEWER_SCRIPT), request)
 
     @router.websocket("/races/{race_id}/replay")
     async def replay_socket(websocket: WebSocket, race_id: str) -> None:

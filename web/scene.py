@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import viser
 
 from sim_core.track import Track
-from web.frame import KART_COLORS, KartFrame, RaceFrame
+from web.frame import KART_COLORS, KartFrame, RaceFrame, kart_label
 from web.hud import hud_text, legend_text
 from web.meshes import PREDICTION_COLOR, WAYPOINT_COLOR, add_track, heading_wxyz
 
@@ -216,7 +216,7 @@ class RaceScene:
             )
             scene.add_label(
                 f"/karts/kart{i}/label",
-                f"{name} ({controller})" if controller and controller != name else name,
+                kart_label(name, controller),
                 position=(0.0, 0.0, 1.0),
                 anchor="bottom-center",
                 font_screen_scale=1.1,

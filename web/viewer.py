@@ -32,6 +32,11 @@ class ViewersBusyError(RuntimeError):
     """No 3D view can be opened now: as many as the server allows are open and watched."""
 
 
+# [s] before that close: viser's client reconnects at once after any close, so an open tab of a race whose scene
+# is gone would otherwise reconnect tens of times a second until viewer-live.js replaces the page
+UNKNOWN_RACE_CLOSE_DELAY_S = 2.0
+
+
 @functools.cache
 def viewer_index_html() -> bytes:
     """viser's client page (``viser/client/build/index.html``), read once."""

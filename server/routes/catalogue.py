@@ -1,4 +1,4 @@
-"""What a race can be made of: ``GET /api/tracks`` and ``GET /api/controllers``."""
+"""What a race can be made of: ``GET /api/tracks``, ``GET /api/controllers`` and ``GET /api/limits``."""
 
 from __future__ import annotations
 
@@ -8,7 +8,8 @@ from functools import lru_cache
 from fastapi import APIRouter
 
 from server.deps import Races
-from server.models import ControllerOut, TrackOut
+from server.limits import DEFAULT_NAME, MAX_KARTS, MAX_NAME_LENGTH, MAX_SEED, MIN_KARTS, MIN_LAPS
+from server.models import ControllerOut, LimitsOut, TrackOut
 from server.race_config import HUMAN
 from sim_core.track import Track
 from sim_core.track_io import builtin_track_names, get_track
@@ -55,3 +56,18 @@ async def list_controllers(races: Races) -> list[ControllerOut]:
     specs = [catalogue[name] for name in sorted(catalogue)]
     out = [ControllerOut(name=s.name, description=s.description, parameters=dict(s.parameters)) for s in specs]
     return [*out, ControllerOut(name=HUMAN, description=HUMAN_DESCRIPTION, parameters={})]
+
+
+@router.get("/limits", response_model=LimitsOut)
+async def race_limits(races: Races) -> LimitsOut:
+    """The limits of a race request (laps, karts, name length, seed) and the default kart names: the start page's
+    form takes them from here, so it allows what the API allows."""
+    return LimitsOut(
+        min_laps=MIN_LAPS,
+        max_laps=races.settings.max_laps,
+        min_karts=MIN_KARTS,
+        max_karts=MAX_KARTS,
+        max_name_length=MAX_NAME_LENGTH,
+        max_seed=MAX_SEED,
+        default_name=DEFAULT_NAME,
+    )

@@ -19,6 +19,7 @@ from controllers.registry import ControllerSpec
 from server.controller_params import check_params
 from server.db import StoredRace
 from server.deps import Races, Recorded
+from server.limits import default_kart_name
 from server.live import LiveRaces, TooManyRacesError
 from server.models import RaceCreatedOut, RaceDetailOut, RaceIn, RaceSummaryOut, ResultOut, TicksOut
 from server.race_config import HUMAN, KartEntry, RaceConfig
@@ -30,6 +31,25 @@ from server.views import created_view, detail_view, result_view, summary_view, t
 LIST_LIMIT = 200
 
 router = APIRouter()
+
+
+def kart_names(body: RaceIn) -> list[str]:
+    """Each kart's display name: as given (trimmed), or the default (``controller N``)."""
+    return [
+        kart.name.strip() if kart.name else default_kart_name(kart.controller, i) for i, kart in enumerate(body.karts)
+    ]
+
+
+def _name_problems(names: list[str]) -> list[tuple[int, str]]:
+    """(kart, what is wrong) for blank names and names given twice (compared without case)."""
+    out = []
+    for i, name in enumerate(names):
+        first = next(j for j, other in enumerate(names) if other.casefold() == name.casefold())
+        if not name:
+            out.append((i, "a kart's name must not be blank"))
+        elif first != i:
+            out.append((i, f"kart {first + 1} is already called {names[first]!r}: give each kart its own name"))
+    return out
 
 
 def race_config(body: RaceIn, catalogue: Mapping[str, ControllerSpec], max_laps: int) -> RaceConfig:
@@ -67,12 +87,12 @@ def race_config(body: RaceIn, catalogue: Mapping[str, ControllerSpec], max_laps:
         for j, lane in enumerate(body.start_lanes):
             if not 1 <= lane <= n_lanes:
                 problem(("start_lanes", j), f"lanes are 1..{n_lanes}, got {lane}", lane)
+    names = kart_names(body)
+    for i, msg in _name_problems(names):
+        problem(("karts", i, "name"), msg, body.karts[i].name)
     if errors or track is None:
         raise RequestValidationError(errors)
-    karts = tuple(
-        KartEntry(i, kart.name or f"{kart.controller} #{i + 1}", kart.controller, dict(kart.params))
-        for i, kart in enumerate(body.karts)
-    )
+    karts = tuple(KartEntry(i, names[i], kart.controller, dict(kart.params)) for i, kart in enumerate(body.karts))
     return RaceConfig(
         track_name=body.track,
         track=track,
@@ -85,7 +105,13 @@ def race_config(body: RaceIn, catalogue: Mapping[str, ControllerSpec], max_laps:
 
 
 def _viewer(races: LiveRaces) -> bool:
+    """Whether this server opens a 3D view for its races."""
     return races.services.scene_factory is not None
+
+
+def _viewer_open(races: LiveRaces, race_id: str) -> bool:
+    """Whether the race's live 3D view is open now (it closes ``keep_finished_s`` after the race ends)."""
+    return races.scene_port(race_id) is not None
 
 
 async def _stored_or_404(races: LiveRaces, race_id: str) -> StoredRace:
@@ -106,7 +132,7 @@ def _not_over(race_id: str, race_status: RaceStatus) -> HTTPException:
     responses={
         422: {
             "description": "unknown track, controller or controller parameter, bad laps, lanes, seed or parameter "
-            "value, more than 8 karts"
+            "value, too many karts, a kart name too long or given twice (limits: GET /api/limits)"
         }
     },
 )
@@ -137,7 +163,7 @@ async def get_race(race_id: str, races: Races) -> RaceDetailOut:
     """One race: its settings, standings, drivers' faults and tick timing."""
     session = races.get(race_id)
     snapshot = session.snapshot() if session is not None else (await _stored_or_404(races, race_id)).snapshot()
-    return detail_view(snapshot, _viewer(races))
+    return detail_view(snapshot, _viewer(races), _viewer_open(races, race_id))
 
 
 @router.post(
@@ -154,7 +180,7 @@ async def stop_race(race_id: str, races: Races) -> RaceDetailOut:
     if not session.stop():
         raise HTTPException(status.HTTP_409_CONFLICT, f"race {race_id} is already over ({session.status.value})")
     await session.wait_status(OVER_STATUSES)
-    return detail_view(session.snapshot(), _viewer(races))
+    return detail_view(session.snapshot(), _viewer(races), _viewer_open(races, race_id))
 
 
 @router.get("/races/{race_id}/ticks", response_model=TicksOut, responses={404: {"description": "no such race"}})

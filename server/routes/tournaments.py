@@ -21,7 +21,7 @@ from arena.report import METRIC_TITLES, plan_rows, plot_stems, safety_rows, win_
 from arena.stats import COMBINED, Standing, leaderboard, tournament_stats
 from arena.tournament import TournamentSpec
 from server.deps import TournamentPlotsDep, Tournaments
-from server.models import MAX_SEED
+from server.limits import MAX_SEED
 from server.tournament_db import TOURNAMENT_ID, StoredTournament, TournamentRace
 from server.tournaments import TooManyTournamentsError, TournamentConflictError, TournamentRunner
 

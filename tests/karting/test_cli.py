@@ -1,10 +1,12 @@
-"""The ``karting`` command line (karting/cli.py): tracks, import-track, race, and its errors (exit code 2)."""
+"""The ``karting`` command line (karting/cli.py): tracks, import-track, race, and its errors (exit code 2); read at
+80 columns and through a pipe (no value cut short), and ``--json`` parsed."""
 
 from __future__ import annotations
 
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -12,25 +14,93 @@ from pathlib import Path
 from typer.testing import CliRunner
 
 from karting.cli import app
+from sim_core.track_io import builtin_track_names
 
 ROOT = Path(__file__).resolve().parents[2]
 runner = CliRunner()
 
 
-def test_tracks_lists_the_builtin_tracks() -> None:
-    done = runner.invoke(app, ["tracks"], env={"COLUMNS": "200"})
+NARROW = {"COLUMNS": "80"}
+RACE = ["race", "--track", "train-oval-small", "--karts", "lane-follower,lane-follower", "--laps", "1"]
+
+
+def _environment() -> dict[str, str]:
+    """This process's environment with the repository importable and no terminal width set (a pipe)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("COLUMNS", "LINES")}
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])
+    return env
+
+
+def _words(text: str) -> set[str]:
+    return {word.strip("│┃,.;:()") for word in text.split()}
+
+
+def test_tracks_shows_every_name_whole_at_80_columns() -> None:
+    done = runner.invoke(app, ["tracks"], env=NARROW)
     assert done.exit_code == 0, done.output
-    for name in ("oval", "complex", "train-oval-small", "train-oval-large"):
-        assert name in done.output
+    assert max(len(line) for line in done.output.splitlines()) <= 80
+    assert "…" not in done.output
+    for name in builtin_track_names():
+        assert name in _words(done.output), name
 
 
-def test_a_short_race_prints_the_referees_result(tmp_path: Path) -> None:
+def test_tracks_piped_shows_every_name_whole() -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "karting", "tracks"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=ROOT,
+        env=_environment(),
+    )
+    assert done.returncode == 0, done.stderr
+    assert "…" not in done.stdout and "\x1b[" not in done.stdout  # no ellipsis, no colour codes in a pipe
+    assert max(len(line) for line in done.stdout.splitlines()) <= 80
+    for name in builtin_track_names():
+        assert name in _words(done.stdout), name
+
+
+def test_tracks_json_lists_every_name_both_ways() -> None:
+    done = runner.invoke(app, ["tracks", "--json"], env=NARROW)
+    assert done.exit_code == 0, done.output
+    listed = json.loads(done.output.strip().splitlines()[-1])
+    names = [t["name"] for t in listed]
+    assert names == [*builtin_track_names(), *(f"{n}-reversed" for n in builtin_track_names())]
+    by_name = {t["name"]: t for t in listed}
+    assert by_name["oval-reversed"]["description"] != by_name["oval"]["description"]
+
+
+def test_a_short_race_prints_the_referees_result_at_80_columns(tmp_path: Path) -> None:
     replay = tmp_path / "race.json"
-    args = ["race", "--track", "train-oval-small", "--karts", "lane-follower,lane-follower", "--laps", "1"]
-    done = runner.invoke(app, [*args, "--replay", str(replay)], env={"COLUMNS": "200"})
+    done = runner.invoke(app, [*RACE, "--replay", str(replay)], env=NARROW)
     assert done.exit_code == 0, done.output
-    assert "winner: kart" in done.output
+    assert max(len(line) for line in done.output.splitlines()) <= 80
+    assert {"lane-follower 1", "lane-follower 2"} <= {line[6:21] for line in done.output.splitlines()}
+    winner = re.search(r"^winner: kart (\d) \(lane-follower (\d)\)$", done.output, re.MULTILINE)
+    assert winner is not None and winner.group(1) == winner.group(2) and winner.group(1) in ("1", "2")
+    assert "kart 0" not in done.output  # karts are numbered from 1
     assert json.loads(replay.read_text())["track"] == "train-oval-small"
+
+
+def test_race_json_is_the_apis_result_on_the_last_line() -> None:
+    done = runner.invoke(app, [*RACE, "--seed", "3", "--start-lanes", "3,2", "--json"], env=NARROW)
+    assert done.exit_code == 0, done.output
+    result = json.loads(done.output.strip().splitlines()[-1])
+    assert result["track"] == "train-oval-small" and result["status"] == "finished"
+    assert result["seed"] == 3 and result["kart_preset"] == "paper" and result["start_lanes"] == [3, 2]
+    karts = result["karts"]
+    assert [k["index"] for k in karts] == [0, 1] and [k["name"] for k in karts] == [
+        "lane-follower 1",
+        "lane-follower 2",
+    ]
+    assert result["winner"] in (0, 1) and karts[result["winner"]]["winner"] and karts[result["winner"]]["position"] == 1
+    for kart in karts:
+        assert {"collisions_at_fault", "illegal_lane_changes", "safety_score", "delta_r", "delta_v", "passes"} <= set(
+            kart
+        )
+        assert len(kart["lap_times"]) == kart["laps"] == 1
+        assert math.isclose(sum(kart["lap_times"]), kart["finish_time"], abs_tol=0.002)
+        assert kart["finish_time"] == round(kart["finish_time"], 3)  # to the millisecond, no float noise
 
 
 def test_unknown_controllers_and_tracks_exit_with_2() -> None:

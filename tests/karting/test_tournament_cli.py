@@ -13,7 +13,7 @@ from karting.cli import app
 
 LOGS = Path(__file__).resolve().parents[3] / "shared" / "spec" / "original_logs"
 runner = CliRunner()
-ENV = {"COLUMNS": "200"}
+ENV = {"COLUMNS": "80"}
 
 
 @pytest.mark.skipif(not LOGS.is_dir(), reason=f"the original's race logs are not at {LOGS} (kept outside the repo)")
@@ -33,13 +33,19 @@ def test_a_reduced_grid_runs_resumes_and_reports(tmp_path: Path) -> None:
     done = runner.invoke(app, args, env=ENV)
     assert done.exit_code == 0, done.output
     assert "tournament cli: 2 races, 0 stored already" in done.output and "wins (oval)" in done.output
-    again = runner.invoke(app, args, env=ENV)
+    assert max(len(line) for line in done.output.splitlines()) <= 80 and "…" not in done.output
+    assert {"fixed-lqng", "lane-follower"} <= set(done.output.split())  # the agents' names whole at 80 columns
+    again = runner.invoke(app, [*args, "--json"], env=ENV)
     assert again.exit_code == 0 and "2 stored already" in again.output
+    summary = json.loads(again.output.strip().splitlines()[-1])
+    assert summary["id"] == "cli" and summary["tracks"]["oval"]["safety"]["fixed-lqng"]["races"] == 2
     stats = runner.invoke(app, ["tournament", "stats", "--id", "cli", "--db", str(db), "--json"], env=ENV)
     assert json.loads(stats.output)["tracks"]["oval"]["safety"]["lane-follower"]["races"] == 2
     out = tmp_path / "report"
-    report = runner.invoke(app, ["tournament", "report", "cli", "--db", str(db), "--out", str(out)], env=ENV)
+    report = runner.invoke(app, ["tournament", "report", "cli", "--db", str(db), "--out", str(out), "--json"], env=ENV)
     assert report.exit_code == 0, report.output
+    written = json.loads(report.output.strip().splitlines()[-1])
+    assert written["folder"] == str(out) and {Path(f).name for f in written["files"]} == {p.name for p in out.iterdir()}
     names = {p.name for p in out.iterdir()}
     assert {"report.md", "stats.json", "wins_oval.csv", "safety_oval.csv", "plan_oval.csv"} <= names
     assert {"wins_oval.png", "safety_oval.png", "finish_times.png"} <= names

@@ -86,6 +86,21 @@ def test_controllers_list_the_registry_and_human(client: httpx.Client) -> None:
         ({"seed": "abc"}, ["body", "seed"], "valid integer"),
         ({"kart_preset": "rocket"}, ["body", "kart_preset"], "'paper' or 'original'"),
         ({"colour": "red"}, ["body", "colour"], "Extra inputs are not permitted"),
+        (
+            {"karts": [{"controller": "lane-follower", "name": "x" * 33}]},
+            ["body", "karts", 0, "name"],
+            "at most 32 characters",
+        ),
+        (
+            {"karts": [{"controller": "lane-follower", "name": "Ann"}, {"controller": "fixed-lqng", "name": "ann "}]},
+            ["body", "karts", 1, "name"],
+            "kart 1 is already called 'Ann'",
+        ),
+        (
+            {"karts": [{"controller": "lane-follower"}, {"controller": "fixed-lqng", "name": "lane-follower 1"}]},
+            ["body", "karts", 1, "name"],
+            "already called 'lane-follower 1'",
+        ),
     ],
 )
 def test_bad_race_requests_get_422_saying_what_is_wrong(
@@ -95,6 +110,18 @@ def test_bad_race_requests_get_422_saying_what_is_wrong(
     assert response.status_code == 422
     errors = response.json()["detail"]
     assert any(e["loc"] == where and says in e["msg"] for e in errors), errors
+
+
+def test_the_limits_are_the_ones_the_api_enforces(client: httpx.Client) -> None:
+    """GET /api/limits (what the start page's form allows) against what POST /api/races accepts."""
+    limits = client.get("/api/limits").json()
+    assert limits["min_laps"] == 1 and limits["max_laps"] == 20  # Settings.max_laps
+    assert (limits["min_karts"], limits["max_karts"]) == (1, 8) and limits["max_name_length"] == 32
+    too_many = {**SHORT_RACE, "karts": [{"controller": "lane-follower"}] * (limits["max_karts"] + 1)}
+    too_long = {**SHORT_RACE, "karts": [{"controller": "lane-follower", "name": "n" * (limits["max_name_length"] + 1)}]}
+    for body in (too_many, too_long, {**SHORT_RACE, "laps": limits["max_laps"] + 1}, {**SHORT_RACE, "laps": 0}):
+        assert client.post("/api/races", json=body).status_code == 422, body
+    assert limits["default_name"] == "{controller} {number}"
 
 
 def test_unknown_race_ids_get_404(client: httpx.Client) -> None:
@@ -138,6 +165,12 @@ def test_ai_race_runs_to_the_finish_and_stores_its_result(finished_race: dict[st
         assert k["safety_score"] == k["collisions_at_fault"] + k["illegal_lane_changes"]
         assert {"delta_r", "delta_v", "wall_hits", "controller_faults"} <= set(k)
     assert karts[1]["delta_r"] is not None  # fixed-lqng's plans became the referee's targets
+    # what the race was started with, default names numbered from 1, lap times, times to the millisecond
+    assert (result["seed"], result["kart_preset"], result["start_lanes"]) == (3, "paper", [2, 3])
+    assert [k["name"] for k in karts] == ["lane-follower 1", "fixed-lqng 2"]
+    for k in karts:
+        assert len(k["lap_times"]) == 1 and k["lap_times"][0] == pytest.approx(k["finish_time"], abs=0.002)
+        assert k["finish_time"] == round(k["finish_time"], 3) and result["duration"] == round(result["duration"], 3)
     listed = {r["id"]: r for r in client.get("/api/races").json()}
     assert listed[race["id"]]["status"] == "finished"
     assert [s["index"] for s in listed[race["id"]]["standings"]] == [winner["index"], 1 - winner["index"]]

@@ -184,7 +184,7 @@ def test_race_requests_name_the_bad_parameter() -> None:
         CATALOGUE,
         20,
     )
-    assert config.karts == (KartEntry(0, "cruiser #1", "cruiser", {"throttle": 0.2}),)
+    assert config.karts == (KartEntry(0, "cruiser 1", "cruiser", {"throttle": 0.2}),)
 
 
 def test_kart_records_know_nothing_of_the_kart_result_field_list() -> None:

@@ -466,3 +466,14 @@ def test_project_sign_convention() -> None:
     assert tr.project(point + np.array([3.0, 0.0]))[1] == pytest.approx(-3.0, abs=1e-6)
     rev = track("oval-reversed")
     assert rev.project(point + np.array([-2.0, 0.0]))[1] == pytest.approx(-2.0, abs=1e-6)
+
+
+def test_a_reversed_track_has_its_own_description() -> None:
+    from sim_core.track_io import builtin_track_names, get_track
+
+    for name in builtin_track_names():
+        forward, backward = get_track(name), get_track(f"{name}-reversed")
+        assert backward.description != forward.description
+        assert backward.description.startswith("Driven the other way round")
+        assert backward.reversed().description == forward.description
+    assert "right-hand 90 deg corners" in get_track("oval-reversed").description

@@ -31,7 +31,7 @@ from sim_core.track import Track
 from sim_core.track_io import get_track
 from web.frame import KartFrame, RaceFrame
 from web.meshes import CHECKPOINT_COLOR, PREDICTION_COLOR, WAYPOINT_COLOR
-from web.routes import make_web_router
+from web.routes import RaceState, make_web_router
 from web.scene import WAYPOINT_POOL, RaceScene
 from web.viewer import VISER_SUBPROTOCOL
 
@@ -281,8 +281,13 @@ def relay_app() -> Iterator[tuple[ServerThread, RaceScene]]:
         s = scenes.get(race_id)
         return None if s is None or s.closed else s.port
 
+    def race_state(race_id: str) -> RaceState | None:
+        states = {"r1": RaceState("running", False), "stale": RaceState("running", False)}
+        states |= {"starting": RaceState("starting", False), "done": RaceState("finished", True)}
+        return states.get(race_id)
+
     app = FastAPI()
-    app.include_router(make_web_router(scene_port))
+    app.include_router(make_web_router(scene_port, race_state))
     with ServerThread(app, lifespan="off") as server:
         yield server, scene
     scene.close()
@@ -305,6 +310,9 @@ def test_pages(relay_app: tuple[ServerThread, RaceScene]) -> None:
             "drive-worker.js",
             "common.js",
             "viewer-wait.js",
+            "viewer-live.js",
+            "race-over.js",
+            "framed.js",
             "tournaments.js",
             "tournament.js",
             "style.css",
@@ -319,17 +327,27 @@ def test_pages(relay_app: tuple[ServerThread, RaceScene]) -> None:
         assert viewer.status_code == 200 and viewer.headers["content-type"].startswith("text/html")
         assert viewer.headers.get("content-encoding") == "gzip"  # httpx asks for gzip and decodes it
         assert len(viewer.content) > 100_000 and b"<html" in viewer.content[:2000].lower()
+        # viewer-live.js comes first, before viser's scripts (it wraps the Worker that holds viser's websocket)
+        assert viewer.content.index(b"/assets/viewer-live.js") < viewer.content.index(b"<script", 200)
         plain = client.get("/races/r1/viewer/", headers={"Accept-Encoding": "identity"})
         assert plain.content == viewer.content
         redirect = client.get("/races/r1/viewer", follow_redirects=False)
         assert redirect.status_code in (301, 302, 307, 308)
         assert redirect.headers["location"].endswith("/races/r1/viewer/")
         missing = client.get("/races/nope/viewer/")
-        assert missing.status_code == 404 and "nope" in missing.text and "viewer-wait.js" in missing.text
+        assert missing.status_code == 404 and "No race <code>nope</code>" in missing.text
+        assert '<script src="/assets/viewer' not in missing.text  # nothing polls or reloads there
+        starting = client.get("/races/starting/viewer/")
+        assert starting.status_code == 200 and "viewer-wait.js" in starting.text and "starting" in starting.text
+        over = client.get("/races/done/viewer/")
+        assert over.status_code == 200 and "is over" in over.text and "viewer-wait.js" not in over.text
+        assert 'href="/races/done/replay"' in over.text and 'href="/api/races/done/result"' in over.text
         hostile = client.get("/races/<b>x/viewer/")
         assert hostile.status_code == 404 and "<b>x" not in hostile.text
         drive = client.get("/races/r1/drive", params={"kart": 1, "token": "t"})
         assert drive.status_code == 200 and "/assets/drive.js" in drive.text
+        unknown_drive = client.get("/races/nope/drive", params={"kart": 1, "token": "t"})
+        assert unknown_drive.status_code == 404 and "No race <code>nope</code>" in unknown_drive.text
 
 
 def test_relay_unknown_race_closes_4404(relay_app: tuple[ServerThread, RaceScene]) -> None:
@@ -411,3 +429,15 @@ def test_relay_passes_version_mismatch_and_scene_close(relay_app: tuple[ServerTh
     while any(name.startswith("viewer-relay") for name in server.task_names()):
         assert time.monotonic() < deadline, "relay tasks leaked after viser stopped"
         time.sleep(0.05)
+
+
+def test_labels_name_the_controller_once_and_the_hud_says_which_faults() -> None:
+    from web.frame import kart_label
+    from web.hud import hud_text, laps_text, legend_text
+
+    assert kart_label("mcts-lqng 1", "mcts-lqng") == "mcts-lqng 1"
+    assert kart_label("Alice", "human") == "Alice (human)"
+    assert (laps_text(1), laps_text(3)) == ("1 lap", "3 laps")
+    table = hud_text("oval", [("A", "lane-follower")], None)
+    assert "| at fault | illegal LC | ctrl faults |" in table
+    assert "collisions at fault" in legend_text() and "controller faults" in legend_text()

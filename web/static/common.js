@@ -28,6 +28,16 @@ function el(tag, attrs, ...children) {
   return node;
 }
 
+// A kart's label: its name, with its controller in brackets unless the name already says it (as web/frame.py).
+function kartLabel(name, controller) {
+  return !controller || String(name).includes(controller) ? String(name) : `${name} (${controller})`;
+}
+
+// "1 lap", "3 laps".
+function plural(count, noun) {
+  return `${count} ${noun}${count === 1 ? "" : "s"}`;
+}
+
 function swatch(i) {
   return el("span", {class: "swatch", style: `background: ${kartColor(i)}`});
 }

@@ -4,15 +4,13 @@
 const LIVE = new Set(["starting", "waiting", "running", "live", "created", "pending"]);
 let tracks = [];
 let controllers = [];
+// GET /api/limits: what the API accepts (the form allows the same) and the default kart names
+let limits = {min_laps: 1, max_laps: 20, min_karts: 1, max_karts: 8, max_name_length: 32, default_name: "{controller} {number}"};
 const kartChoices = []; // [{controller, name, nameEdited}]
 
 // ------------------------------------------------------------------ race list
-function kartLabel(kart, i) {
-  if (kart && typeof kart === "object") {
-    const name = kart.name || kart.display_name || `kart ${i + 1}`;
-    const controller = kart.controller || kart.driver || "";
-    return controller && controller !== name ? `${name} (${controller})` : name;
-  }
+function kartCell(kart, i) {
+  if (kart && typeof kart === "object") return kartLabel(kart.name || `kart ${i + 1}`, kart.controller || "");
   return String(kart);
 }
 
@@ -56,9 +54,9 @@ function raceRow(race) {
   const track = typeof race.track === "object" && race.track ? (race.track.name || JSON.stringify(race.track)) : race.track;
   return el("tr", {"data-race-id": id},
     el("td", {}, el("code", {title: id}, id.length > 10 ? id.slice(0, 8) + "…" : id)),
-    el("td", {}, track || "–", race.laps ? el("span", {class: "muted small"}, ` · ${race.laps} laps`) : null),
+    el("td", {}, track || "–", race.laps ? el("span", {class: "muted small"}, ` · ${plural(race.laps, "lap")}`) : null),
     el("td", {}, el("span", {class: `status ${status}`}, status)),
-    el("td", {class: "small"}, karts.map((k, i) => el("div", {}, swatch(i), kartLabel(k, i)))),
+    el("td", {class: "small"}, karts.map((k, i) => el("div", {}, swatch(i), kartCell(k, i)))),
     el("td", {}, standingsCell(race)),
     el("td", {class: "small"},
       live ? el("div", {}, el("a", {href: viewerUrl, target: "_blank", rel: "noopener"}, "viewer")) : null,
@@ -97,13 +95,26 @@ function showTrackInfo() {
   if (typeof track.length_m === "number") parts.push(`${track.length_m.toFixed(0)} m`);
   if (track.n_checkpoints !== undefined) parts.push(`${track.n_checkpoints} checkpoints`);
   if (track.lane_change_limit !== undefined) parts.push(`lane-change limit L = ${track.lane_change_limit}`);
-  if (track.laps !== undefined) parts.push(`${track.laps} laps by default`);
+  if (track.laps !== undefined) parts.push(`${plural(track.laps, "lap")} by default`);
   info.textContent = parts.join(" · ");
   if (track.laps !== undefined) document.getElementById("laps").value = track.laps;
 }
 
 function defaultName(controller, i) {
-  return `${controller || "kart"} ${i + 1}`;
+  return limits.default_name.replace("{controller}", controller || "kart").replace("{number}", String(i + 1));
+}
+
+// The form's limits, as the API's (GET /api/limits).
+function applyLimits() {
+  const laps = document.getElementById("laps");
+  laps.min = limits.min_laps;
+  laps.max = limits.max_laps;
+  document.getElementById("laps-hint").textContent = `${limits.min_laps} to ${limits.max_laps}`;
+  const count = document.getElementById("n-karts");
+  const chosen = Number(count.value) || 2;
+  const options = [];
+  for (let n = limits.min_karts; n <= limits.max_karts; n++) options.push(el("option", {value: n, selected: n === chosen}, n));
+  count.replaceChildren(...options);
 }
 
 function controllerHint(name) {
@@ -127,7 +138,7 @@ function renderKarts() {
     const choice = kartChoices[i];
     const select = el("select", {"aria-label": `controller of kart ${i + 1}`, name: `controller-${i}`, title: controllerHint(choice.controller)},
       controllers.map((c) => el("option", {value: c.name, selected: c.name === choice.controller}, c.name)));
-    const input = el("input", {type: "text", maxlength: 32, "aria-label": `name of kart ${i + 1}`, name: `name-${i}`, value: choice.name, required: true});
+    const input = el("input", {type: "text", maxlength: limits.max_name_length, "aria-label": `name of kart ${i + 1}`, name: `name-${i}`, value: choice.name, required: true});
     select.addEventListener("change", () => {
       choice.controller = select.value;
       select.title = controllerHint(select.value);
@@ -202,7 +213,10 @@ async function init() {
   setInterval(refreshRaces, 2000);
   const msg = document.getElementById("launch-msg");
   try {
-    const [trackBody, controllerBody] = await Promise.all([fetchJSON("/api/tracks"), fetchJSON("/api/controllers")]);
+    const [trackBody, controllerBody, limitsBody] = await Promise.all(
+      [fetchJSON("/api/tracks"), fetchJSON("/api/controllers"), fetchJSON("/api/limits")]);
+    limits = limitsBody;
+    applyLimits();
     tracks = listOf(trackBody, "tracks").map((t) => (typeof t === "string" ? {name: t} : t));
     controllers = listOf(controllerBody, "controllers").map((c) => (typeof c === "string" ? {name: c} : c));
     const trackSelect = document.getElementById("track");

@@ -1,0 +1,19 @@
+"""The limits of a race request, defined once: the API's models check them, and the start page's form reads
+them from ``GET /api/limits`` (with the default kart names), so the two cannot disagree.
+
+The most laps a race may have is a server setting (``Settings.max_laps``, ``KARTING_MAX_LAPS``).
+"""
+
+from __future__ import annotations
+
+MIN_KARTS = 1
+MAX_KARTS = 8  # one colour per grid slot (web.frame.KART_COLORS)
+MAX_NAME_LENGTH = 32  # [characters] of a kart's display name: it must fit the viewer's standings table
+MIN_LAPS = 1
+MAX_SEED = 2**31 - 1
+DEFAULT_NAME = "{controller} {number}"  # an unnamed kart's display name (number: grid slot from 1)
+
+
+def default_kart_name(controller: str, index: int) -> str:
+    """The display name of an unnamed kart: its controller and its number (``index`` + 1), e.g. ``mcts-lqng 1``."""
+    return DEFAULT_NAME.format(controller=controller, number=index + 1)
