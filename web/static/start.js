@@ -1,7 +1,7 @@
 // Start page: the live and finished races (polled), and the form that launches a race.
 "use strict";
 
-const LIVE = new Set(["starting", "waiting", "running", "live", "created", "pending"]);
+const LIVE = new Set(["starting", "waiting", "countdown", "running", "live", "created", "pending"]);
 let tracks = [];
 let controllers = [];
 const kartChoices = []; // [{controller, name, nameEdited}]
