@@ -284,6 +284,7 @@ class RaceSession:
             return
         loop = asyncio.get_running_loop()
         go = loop.time() + self.settings.countdown_s
+        self._countdown = self.settings.countdown_s
         await self._set_status(RaceStatus.COUNTDOWN)
         while (left := go - loop.time()) > 0:
             self._countdown = left
