@@ -5,8 +5,9 @@ lane follower) on the oval. The race waits for the page's 3D view, counts down o
 with no kart moving although the throttle key is held, then the kart answers the keyboard; the view chases the
 driven kart; a gamepad (``navigator.getGamepads`` replaced in the page) steers with its left stick; at the end
 the page states the driver's own result, the winner by name, no "reconnect" button, and "Race again" starts the
-same race anew. Screenshots: ``test-artifacts/drive-countdown.png``, ``drive-running.png``, ``drive-end.png``.
-No request may leave the machine. Skipped only when no chromium binary is installed.
+same race anew; the first race's link, opened again, shows its end. Screenshots: ``test-artifacts/
+drive-countdown.png``, ``drive-running.png``, ``drive-end.png``. No request may leave the machine. Skipped only
+when no chromium binary is installed.
 """
 
 from __future__ import annotations
@@ -127,13 +128,14 @@ def test_a_person_drives_a_race_in_a_real_browser(live: LiveServer) -> None:
                 )
                 page.set_default_timeout(90_000)
                 page.add_init_script(FAKE_GAMEPADS)
-                page.goto(f"{live.url}{race['karts'][0]['drive_url']}")
+                link = f"{live.url}{race['karts'][0]['drive_url']}"
+                page.goto(link)
 
                 _the_race_counts_down_with_nothing_moving(page, telemetry)
                 _the_kart_answers_the_keyboard_and_the_view_chases_it(page, telemetry)
                 _a_gamepad_steers(page, telemetry)
                 _the_end_states_my_result(page, client, telemetry, race)
-                _race_again_starts_the_same_race(page, client, race)
+                _race_again_starts_the_same_race(page, client, race, link)
             finally:
                 browser.close()
     finally:
@@ -203,7 +205,7 @@ def _the_end_states_my_result(page: Any, client: httpx.Client, telemetry: Teleme
     page.screenshot(path=str(ARTIFACTS / "drive-end.png"))
 
 
-def _race_again_starts_the_same_race(page: Any, client: httpx.Client, race: dict[str, Any]) -> None:
+def _race_again_starts_the_same_race(page: Any, client: httpx.Client, race: dict[str, Any], first_link: str) -> None:
     old = race["id"]
     page.get_by_role("button", name="Race again").click()
     page.wait_for_url(lambda url: f"/races/{old}/" not in url)
@@ -216,3 +218,8 @@ def _race_again_starts_the_same_race(page: Any, client: httpx.Client, race: dict
     assert [(k["name"], k["controller"]) for k in again["karts"]] == [("Ada", "human"), ("Bot", "lane-follower")]
     page.locator("#countdown").wait_for(state="visible")  # the new race waits for this page's view again
     client.post(f"/api/races/{new.group(1)}/stop")
+    # the first race's link, opened again later, shows its end as it was
+    page.goto(first_link)
+    page.locator("#end").wait_for(state="visible")
+    assert page.locator("#end-you").inner_text().startswith("You (Ada): P")
+    assert page.locator("#reconnect").is_hidden() and page.locator("#conn").inner_text() == "race over"

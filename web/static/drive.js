@@ -334,6 +334,7 @@ function connect() {
   worker.postMessage({cmd: "connect", url});
 }
 
+// Read the race (names, laps, whether it has a 3D view); false when it is already over (its result is shown).
 async function loadRace(frame) {
   try {
     race = await fetchJSON(`/api/races/${encodeURIComponent(raceId)}`);
@@ -342,8 +343,13 @@ async function loadRace(frame) {
   }
   $("kart-name").textContent = kartName(kartIndex);
   if (race && OVER.has(race.status)) {
-    showBanner(`This race is over (${race.status}).`);
     ended = true;
+    $("reconnect").hidden = true;
+    let result = null;
+    try { result = await fetchJSON(`/api/races/${encodeURIComponent(raceId)}/result`); } catch (_) { /* none */ }
+    setConn("closed", "race over");
+    showEnd(race.status, result);
+    return false;
   }
   if (race && race.viewer_url) {
     frame.src = viewerUrl();
@@ -351,6 +357,7 @@ async function loadRace(frame) {
   } else {
     setViewReady(race ? "this server has no 3D view" : "no 3D view");
   }
+  return true;
 }
 
 function init() {
@@ -379,8 +386,7 @@ function init() {
   $("reconnect").addEventListener("click", connect);
   $("again").addEventListener("click", raceAgain);
   document.addEventListener("visibilitychange", () => { if (document.hidden) releaseAll(); });
-  connect();
-  loadRace(frame);
+  loadRace(frame).then((live) => { if (live) connect(); });
   $("panel").focus();
 }
 
