@@ -89,6 +89,7 @@ class KartDriver:
         # human side
         self.connected = False
         self.ever_connected = False
+        self.view_ready = False  # its driver's view has loaded (at once for clients without a view)
         self.input: tuple[float, float, int | None] | None = None  # newest (steer, throttle, seq) received
         self.input_at: float | None = None  # [s] time.monotonic() of the newest input
         self.applied_seq: int | None = None  # seq of the input applied at the last tick

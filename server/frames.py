@@ -20,10 +20,17 @@ POSE_COLUMNS = [st.F_X, st.F_Y, st.F_HEADING, st.F_SPEED]
 
 
 def build_frame(
-    race_id: str, track_name: str, laps: int, status: str, world: World, drivers: Sequence[KartDriver], plans: int
+    race_id: str,
+    track_name: str,
+    laps: int,
+    status: str,
+    world: World,
+    drivers: Sequence[KartDriver],
+    plans: int,
+    countdown: float | None = None,
 ) -> RaceFrame:
-    """The frame of race 0 of ``world`` now, with each kart's driver (faults, drawn plan); ``plans`` is the
-    race's plans version."""
+    """The frame of race 0 of ``world`` now, with each kart's driver (faults, drawn plan: none once the kart
+    finished); ``plans`` is the race's plans version, ``countdown`` [s] the time left before the start."""
     n_cp = world.track.n_checkpoints
     fs = world.fstate[0].tolist()
     ints = world.istate[0].tolist()
@@ -55,8 +62,8 @@ def build_frame(
                 finished=finished,
                 finish_time=f[st.F_FINISH_TIME] if finished else None,
                 controller_faults=d.faults,
-                waypoints=d.waypoints,
-                predicted=d.predicted,
+                waypoints=() if finished else d.waypoints,
+                predicted=() if finished else d.predicted,
             )
         )
     step = int(world.steps[0])
@@ -69,6 +76,7 @@ def build_frame(
         status=status,
         karts=tuple(karts),
         plans_version=plans,
+        countdown=countdown,
     )
 
 

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any, Literal, get_type_hints
 
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
+from server.drive_events import DRIVE_EVENT_KINDS
 from server.limits import MAX_KARTS, MAX_NAME_LENGTH, MAX_SEED, MIN_KARTS, MIN_LAPS
 from server.race_config import ParamValue
 from server.results import DriverFaults, record_name
@@ -281,6 +282,14 @@ class DriveInput(BaseModel):
     seq: int | None = Field(None, description="echoed back as input_seq in the state after it is applied")
 
 
+class DriveReady(BaseModel):
+    """A message on the drive websocket: the driver's view has loaded (clients that connect with ``view=1``)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    type: Literal["ready"]
+
+
 # ----------------------------------------------------------------------------------------- websocket messages
 # close codes of refused or ended websocket connections (1000: a normal close at the end of a race)
 CLOSE_BAD_REQUEST = 4400
@@ -300,6 +309,19 @@ class StateMessage(BaseModel):
     input_seq: int | None
     braking: bool
     kart: KartFrame
+    countdown: float | None = Field(None, description="[s] left before the start (status countdown)")
+    waiting_for: list[str] = Field(
+        default_factory=list, description="status waiting: the human drivers not yet connected or not yet ready"
+    )
+
+
+class EventMessage(BaseModel):
+    """Drive websocket: something that just happened to the driven kart, worded for its driver's screen."""
+
+    type: Literal["event"] = "event"
+    kind: str = Field(description="one of " + ", ".join(DRIVE_EVENT_KINDS))
+    text: str
+    time: float = Field(description="[s] race time")
 
 
 class EndMessage(BaseModel):
@@ -329,6 +351,7 @@ class FrameMessage(BaseModel):
     status: str
     karts: tuple[KartFrame, ...]
     plans_version: int
+    countdown: float | None = Field(None, description="[s] left before the start (status countdown)")
 
 
 class ResultMessage(BaseModel):

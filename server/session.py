@@ -2,9 +2,10 @@
 3D scene and subscribers.
 
 Life of a race (:class:`~server.status.RaceStatus`): ``starting`` (world built, controllers reset, planners
-built in their worker, scene opened) -> ``waiting`` (only with human karts: until every driver has connected)
--> ``running`` -> ``finished`` (the referee's rules: everyone finished or the time limit), ``stopped`` (on
-request) or ``aborted`` (server shutdown). The result (:class:`~server.results.RaceRecord`) and the replay are
+built in their worker, scene opened) -> ``waiting`` and ``countdown`` (only with human karts: until every driver
+has connected and its view is ready, or a timeout; then a countdown during which nothing moves) -> ``running``
+-> ``finished`` (the referee's rules: everyone finished or the time limit), ``stopped`` (on request) or
+``aborted`` (server shutdown). The result (:class:`~server.results.RaceRecord`) and the replay are
 then stored; the race stays live for a while so viewers see the end.
 
 Each tick (see :mod:`server.ticks` for the schedule) does only bounded work on the event loop: deliver plans
@@ -51,6 +52,7 @@ from web.frame import RaceFrame
 log = logging.getLogger(__name__)
 
 HANG_POLL_S = 0.02  # [s] how often a starting race checks its controllers' resets
+GRID_PUBLISH_S = 0.1  # [s] how often a race waiting for its drivers or counting down publishes a frame
 
 
 class RaceSession:
@@ -78,6 +80,8 @@ class RaceSession:
         self._plans = PlanRequests(race_id, services.planners, self.settings.plan_timeout_s)
         self._actions = np.zeros((1, len(self.drivers), 2))
         self._telemetry = TelemetryMessage()
+        self._countdown: float | None = None  # [s] left before the start, while counting down
+        self._finished = 0  # karts finished at the last tick
         self._stop_status: RaceStatus | None = None
         self._stop = asyncio.Event()
         self._close = asyncio.Event()
@@ -134,6 +138,12 @@ class RaceSession:
         driver.input = (steer, throttle, seq)
         driver.input_at = time.monotonic()
 
+    def waiting_for(self) -> list[KartDriver]:
+        """The human drivers the race still waits for (not connected yet, or their view not ready)."""
+        if self.status not in (RaceStatus.STARTING, RaceStatus.WAITING):
+            return []
+        return [d for d in self.drivers if d.human and not (d.ever_connected and d.view_ready)]
+
     # ------------------------------------------------------------------ views
     def telemetry_message(self) -> str | None:
         """The current frame as a telemetry JSON message (built once per frame for every subscriber)."""
@@ -180,8 +190,10 @@ class RaceSession:
     async def _run(self) -> None:
         try:
             await self._prepare()
-            if self._stop_status is None:
+            if self._stop_status is None and any(d.human for d in self.drivers):
                 await self._wait_for_humans()
+                if self._stop_status is None:
+                    await self._count_down()
             if self._stop_status is None:
                 await self._race()
             await self._end(self._stop_status or RaceStatus.FINISHED)
@@ -251,17 +263,46 @@ class RaceSession:
             log.exception("race %s: the 3D view could not start; racing without it", self.id)
 
     async def _wait_for_humans(self) -> None:
-        humans = [d for d in self.drivers if d.human]
-        if not humans:
-            return
+        """Wait until every human driver has connected and its view is ready: at most ``human_wait_s`` for the
+        connections, then at most ``view_ready_wait_s`` for the views; then the race starts anyway."""
         await self._set_status(RaceStatus.WAITING)
-        give_up = time.monotonic() + self.settings.human_wait_s
-        while not all(d.ever_connected for d in humans) and time.monotonic() < give_up:
-            try:
-                await asyncio.wait_for(self._stop.wait(), 0.05)
+        now = time.monotonic()
+        joined_by = now + self.settings.human_wait_s
+        ready_by: float | None = None
+        while self.waiting_for():
+            now = time.monotonic()
+            if ready_by is None and all(d.ever_connected for d in self.drivers if d.human):
+                ready_by = now + self.settings.view_ready_wait_s
+            if now >= (ready_by if ready_by is not None else joined_by):
+                late = ", ".join(d.name for d in self.waiting_for())
+                log.info("race %s: starting without waiting longer for %s", self.id, late)
                 return
-            except TimeoutError:
-                pass
+            self._publish()  # the drive pages show whom the race waits for
+            if await self._stopped_within(GRID_PUBLISH_S):
+                return
+
+    async def _count_down(self) -> None:
+        """``countdown_s`` of wall time before the start, published in the frames; nothing moves meanwhile."""
+        if self.settings.countdown_s <= 0:
+            return
+        loop = asyncio.get_running_loop()
+        go = loop.time() + self.settings.countdown_s
+        self._countdown = self.settings.countdown_s
+        await self._set_status(RaceStatus.COUNTDOWN)
+        while (left := go - loop.time()) > 0:
+            self._countdown = left
+            self._publish()
+            if await self._stopped_within(min(GRID_PUBLISH_S, left)):
+                break
+        self._countdown = None
+
+    async def _stopped_within(self, seconds: float) -> bool:
+        """Wait ``seconds``; True if the race was stopped meanwhile."""
+        try:
+            await asyncio.wait_for(self._stop.wait(), seconds)
+        except TimeoutError:
+            return False
+        return True
 
     async def _race(self) -> None:
         assert self.world is not None
@@ -304,6 +345,10 @@ class RaceSession:
         self._submit(observations)
         self._plans.request(self.drivers, observations)
         self.replay.record(world, self._actions[0])
+        finished = int(world.istate[0, :, st.I_FINISHED].sum())
+        if finished != self._finished:  # a finished kart's waypoints disappear from the views
+            self._finished = finished
+            self.plans_version += 1
         self._publish()
 
     def _submit(self, observations: Sequence[Observation]) -> None:
@@ -350,7 +395,14 @@ class RaceSession:
             return
         config = self.config
         self.frame = frame = build_frame(
-            self.id, config.track_name, config.laps, self.status.value, self.world, self.drivers, self.plans_version
+            self.id,
+            config.track_name,
+            config.laps,
+            self.status.value,
+            self.world,
+            self.drivers,
+            self.plans_version,
+            round(self._countdown, 2) if self._countdown is not None else None,
         )
         if self.scene is not None:
             try:

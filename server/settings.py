@@ -32,6 +32,14 @@ class Settings(BaseSettings):
         default=0.5, gt=0.0, description="[s] wall time without driver input before the kart brakes"
     )
     human_wait_s: float = Field(default=120.0, ge=0.0, description="[s] a race waits this long for its human drivers")
+    view_ready_wait_s: float = Field(
+        default=30.0,
+        ge=0.0,
+        description="[s] once every human driver is connected, the race waits this long for their views to load",
+    )
+    countdown_s: float = Field(
+        default=3.0, ge=0.0, le=10.0, description="[s] countdown before a race with human drivers starts"
+    )
     controller_hold_s: float = Field(
         default=0.5, ge=0.0, description="[s] race time a kart holds its input without a fresh one, then brakes"
     )

@@ -9,7 +9,8 @@ class RaceStatus(StrEnum):
     """Where a race is in its life (see :mod:`server.session`); the values are what the API and database show."""
 
     STARTING = "starting"  # world built, controllers reset, planners built, scene opened
-    WAITING = "waiting"  # only with human karts: until every driver has connected
+    WAITING = "waiting"  # only with human karts: until every driver has connected and its view is ready
+    COUNTDOWN = "countdown"  # only with human karts: a few seconds before the start; nothing moves
     RUNNING = "running"
     FINISHED = "finished"  # the referee's rules: everyone finished or the time limit
     STOPPED = "stopped"  # on request
@@ -21,5 +22,5 @@ class RaceStatus(StrEnum):
         return self in LIVE_STATUSES
 
 
-LIVE_STATUSES = frozenset({RaceStatus.STARTING, RaceStatus.WAITING, RaceStatus.RUNNING})
+LIVE_STATUSES = frozenset({RaceStatus.STARTING, RaceStatus.WAITING, RaceStatus.COUNTDOWN, RaceStatus.RUNNING})
 OVER_STATUSES = frozenset(RaceStatus) - LIVE_STATUSES

@@ -51,7 +51,7 @@ class KartFrame:
     finished: bool
     finish_time: float | None  # [s]
     controller_faults: int  # exceptions, hangs and missed deadlines of its driver
-    waypoints: tuple[tuple[float, float], ...] = ()  # the ego plan's waypoint positions (drawn green)
+    waypoints: tuple[tuple[float, float], ...] = ()  # the ego plan's waypoints (drawn green; () once finished)
     predicted: tuple[tuple[float, float], ...] = ()  # its planner's predictions of the other karts' waypoints
 
 
@@ -67,3 +67,4 @@ class RaceFrame:
     status: str  # the race status (server.status.RaceStatus values: "starting", "running", "finished", ...)
     karts: tuple[KartFrame, ...]
     plans_version: int  # changes whenever any kart's waypoints change (viewers redraw plans only then)
+    countdown: float | None = None  # [s] wall time left before the start (status "countdown"), else None

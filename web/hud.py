@@ -7,6 +7,7 @@ Display names come from users and viser renders raw HTML unsanitised, so every n
 from __future__ import annotations
 
 import html
+import math
 from collections.abc import Sequence
 
 from web.frame import KART_COLORS, KartFrame, RaceFrame
@@ -43,6 +44,10 @@ def _lap(kart: KartFrame) -> str:
     return _nowrap("✓ " + (f"{kart.finish_time:.2f} s" if kart.finish_time is not None else ""))
 
 
+def _speed(kart: KartFrame) -> str:
+    return "–" if kart.finished else f"{kart.speed * 3.6:.0f}"  # a finished kart's speed is of no interest
+
+
 def hud_text(track_name: str, karts: Sequence[tuple[str, str]], frame: RaceFrame | None) -> str:
     """The standings table of ``frame`` (before the first frame: the grid of ``karts``, ``(name, controller)``)."""
     if frame is None:
@@ -56,11 +61,13 @@ def hud_text(track_name: str, karts: Sequence[tuple[str, str]], frame: RaceFrame
         for k in sorted(frame.karts, key=lambda k: k.position):
             rows.append(
                 f"| {_nowrap(_swatch(k.index) + ' ' + markdown_text(k.name))} | {k.position} | {_lap(k)} | "
-                f"{k.speed * 3.6:.0f} | {k.collisions_at_fault} | {k.illegal_lane_changes} | "
+                f"{_speed(k)} | {k.collisions_at_fault} | {k.illegal_lane_changes} | "
                 f"{k.controller_faults} |"
             )
-        track, status = markdown_text(frame.track), markdown_text(frame.status)
-        head = f"**{track}** · {status} · {frame.time:.1f} s · {laps_text(frame.laps)}"
+        status = f"starts in {math.ceil(frame.countdown)}" if frame.countdown is not None else frame.status
+        head = (
+            f"**{markdown_text(frame.track)}** · {markdown_text(status)} · {frame.time:.1f} s · {laps_text(frame.laps)}"
+        )
     return head + "\n\n" + _TABLE_HEAD + "\n".join(rows)
 
 

@@ -10,8 +10,9 @@ The scene is built once in the constructor; :meth:`RaceScene.update` only moves,
   (translucent orange boxes: its planner's predictions of the other karts' waypoints), hidden when unused.
 
 The GUI has a HUD (:mod:`web.hud`: markdown, shared by every viewer) and a per-viewer "Follow" dropdown whose
-camera chases the chosen kart. The viser server listens on 127.0.0.1 only; browsers reach it through
-:mod:`web.viewer`'s relay.
+camera chases the chosen kart; a viewer whose websocket URL asks for ``?follow=K`` (the drive page's view,
+through viser's ``?websocket=`` page parameter) starts chasing kart ``K`` (grid index). The viser server listens
+on 127.0.0.1 only; browsers reach it through :mod:`web.viewer`'s relay.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from urllib.parse import parse_qs, urlsplit
 
 import viser
 
@@ -260,8 +262,21 @@ class RaceScene:
     def _follow_options(self) -> list[str]:
         return [FREE_CAMERA, *(f"{i + 1}: {name}" for i, (name, _) in enumerate(self.karts))]
 
+    def _requested_follow(self, client: viser.ClientHandle) -> str:
+        """The option a viewer asked to start on (``?follow=K`` on its websocket URL), else the free camera."""
+        try:  # viser 1.1.x keeps each client's websocket connection, with its request, here
+            request = self.server._websock_server._live_connections[client.client_id].request
+        except Exception:
+            return FREE_CAMERA
+        asked = parse_qs(urlsplit(request.path).query).get("follow", [""])[-1] if request is not None else ""
+        options = self._follow_options()
+        if asked.isascii() and asked.isdigit() and int(asked) + 1 < len(options):
+            return options[int(asked) + 1]
+        return FREE_CAMERA
+
     def _on_connect(self, client: viser.ClientHandle) -> None:
-        follow = client.gui.add_dropdown("Follow", self._follow_options(), initial_value=FREE_CAMERA, order=0.0)
+        initial = self._requested_follow(client)
+        follow = client.gui.add_dropdown("Follow", self._follow_options(), initial_value=initial, order=0.0)
         with self._viewers_lock:
             self._viewers[client.client_id] = _Viewer(client, follow)
 

@@ -63,15 +63,16 @@ def requested_subprotocol(websocket: WebSocket) -> str | None:
 async def relay_viewer(websocket: WebSocket, port: int) -> None:
     """Relay a browser's viewer websocket to the viser server on ``127.0.0.1:port`` until either side ends.
 
-    The browser's ``viser-v<version>`` subprotocol is forwarded (viser closes mismatched versions with 1002,
-    which is passed back); frames are pumped both ways by two tasks, and when one side closes the other is
-    closed too. A normal browser disconnect logs nothing.
+    The browser's query string and ``viser-v<version>`` subprotocol are forwarded (viser closes mismatched
+    versions with 1002, which is passed back); frames are pumped both ways by two tasks, and when one side
+    closes the other is closed too. A normal browser disconnect logs nothing.
     """
     protocol = requested_subprotocol(websocket)
     subprotocols = [Subprotocol(protocol or VISER_SUBPROTOCOL)]
+    query = websocket.url.query  # the scene reads its viewer's choices there (``follow``: web.scene)
     try:
         upstream = await websockets.connect(
-            f"ws://127.0.0.1:{port}",
+            f"ws://127.0.0.1:{port}/" + (f"?{query}" if query else ""),
             subprotocols=subprotocols,
             max_size=None,
             compression=None,

@@ -1,13 +1,20 @@
-"""Driving a human kart over a websocket: ``/api/races/{id}/drive?kart=K&token=T``.
+"""Driving a human kart over a websocket: ``/api/races/{id}/drive?kart=K&token=T`` (optionally ``&view=1``).
 
 The client sends ``{"steer": s, "throttle": t}`` (each in [-1, 1], optionally ``"seq": n``) up to 50 times a
-second; the newest message holds until the next. After every tick the server sends a
+second; the newest message holds until the next. A race with human karts starts once every driver is connected
+and ready, after a countdown (status ``countdown``) during which no kart moves. A client is ready when it
+connects, unless it connects with ``view=1``: a client that first loads a view of the race (the drive page), and
+then says ``{"type": "ready"}``. After every tick (and ten times a second before the start) the server sends a
 :class:`~server.models.StateMessage` ``{"type": "state", "step", "time", "status", "input_seq", "braking",
-"kart": {KartFrame}}``, where ``input_seq`` is the ``seq`` of the input that tick applied. A bad message gets an
-:class:`~server.models.ErrorMessage` ``{"type": "error", "error": ...}`` and the connection stays. Silence for
-``drive_timeout_s`` brakes the kart. When the race ends: an :class:`~server.models.EndMessage` ``{"type":
-"end", "status", "result"}`` and a normal close. Refusals close with a code and reason: 4400 bad ``kart`` / not
-a human kart, 4403 wrong token, 4404 no such race, 4409 the kart already has a driver, 4410 the race is over.
+"kart": {KartFrame}, "countdown", "waiting_for"}``, where ``input_seq`` is the ``seq`` of the input that tick
+applied, ``countdown`` the seconds left before the start and ``waiting_for`` the drivers the race still waits for;
+and an :class:`~server.models.EventMessage` ``{"type": "event", "kind", "text", "time"}`` when something happens
+to the kart (:mod:`server.drive_events`: the start, wall hits, collisions at fault, illegal lane changes, driving
+the wrong way, passes, laps, the finish). A bad message gets an :class:`~server.models.ErrorMessage` ``{"type":
+"error", "error": ...}`` and the connection stays. Silence for ``drive_timeout_s`` brakes the kart. When the race
+ends: an :class:`~server.models.EndMessage` ``{"type": "end", "status", "result"}`` and a normal close. Refusals
+close with a code and reason: 4400 bad ``kart`` or ``view`` / not a human kart, 4403 wrong token, 4404 no such
+race, 4409 the kart already has a driver, 4410 the race is over.
 """
 
 from __future__ import annotations
@@ -20,6 +27,7 @@ from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from pydantic import ValidationError
 
 from server.deps import Races
+from server.drive_events import DriveEvents
 from server.drivers import KartDriver
 from server.models import (
     CLOSE_BAD_REQUEST,
@@ -28,8 +36,10 @@ from server.models import (
     CLOSE_OVER,
     CLOSE_TAKEN,
     DriveInput,
+    DriveReady,
     EndMessage,
     ErrorMessage,
+    EventMessage,
     StateMessage,
 )
 from server.session import RaceSession
@@ -53,14 +63,20 @@ def _describe(exc: ValidationError) -> str:
     return "; ".join(parts)
 
 
-def _parse(text: str) -> DriveInput | str:
-    """The input in ``text``, or what is wrong with it."""
+def _parse(text: str) -> DriveInput | DriveReady | str:
+    """The input or the ready message in ``text``, or what is wrong with it."""
     if len(text) > MAX_MESSAGE_CHARS:
         return f"message too long ({len(text)} characters, at most {MAX_MESSAGE_CHARS})"
     try:
         return DriveInput.model_validate_json(text)
     except ValidationError as exc:
-        return _describe(exc)
+        error = exc
+    if '"type"' in text:  # inputs have no type: say what is wrong with it as a ready message
+        try:
+            return DriveReady.model_validate_json(text)
+        except ValidationError as exc:
+            error = exc
+    return _describe(error)
 
 
 @router.websocket("/races/{race_id}/drive")
@@ -69,6 +85,7 @@ async def drive(websocket: WebSocket, race_id: str, races: Races) -> None:
     await websocket.accept()
     kart_param = websocket.query_params.get("kart")
     token = websocket.query_params.get("token", "")
+    view = websocket.query_params.get("view", "0")
     session = races.get(race_id)
     if session is None:
         stored = await asyncio.to_thread(races.services.db.get, race_id)
@@ -77,6 +94,8 @@ async def drive(websocket: WebSocket, race_id: str, races: Races) -> None:
         return await refuse(websocket, CLOSE_OVER, f"race is over ({stored.status.value})")
     if kart_param is None or not kart_param.isdigit() or int(kart_param) >= len(session.drivers):
         return await refuse(websocket, CLOSE_BAD_REQUEST, f"kart must be 0..{len(session.drivers) - 1}")
+    if view not in ("0", "1"):
+        return await refuse(websocket, CLOSE_BAD_REQUEST, "view must be 0 or 1")
     driver = session.drivers[int(kart_param)]
     if not driver.human or driver.token is None:
         return await refuse(websocket, CLOSE_BAD_REQUEST, f"kart {driver.index} is not a human kart")
@@ -88,6 +107,7 @@ async def drive(websocket: WebSocket, race_id: str, races: Races) -> None:
         return await refuse(websocket, CLOSE_TAKEN, f"kart {driver.index} already has a driver")
     driver.connected = True
     driver.ever_connected = True
+    driver.view_ready = view == "0"
     lock = asyncio.Lock()  # the state sender and the error replies share the socket
     sender = asyncio.get_running_loop().create_task(_send_states(websocket, session, driver, lock))
     try:
@@ -103,7 +123,10 @@ async def drive(websocket: WebSocket, race_id: str, races: Races) -> None:
                 async with lock:
                     await websocket.send_text(ErrorMessage(error=parsed).model_dump_json())
                 continue
-            session.drive_input(driver.index, parsed.steer, parsed.throttle, parsed.seq)
+            if isinstance(parsed, DriveReady):
+                driver.view_ready = True
+            else:
+                session.drive_input(driver.index, parsed.steer, parsed.throttle, parsed.seq)
     except (WebSocketDisconnect, RuntimeError):
         pass  # the sender closed the socket at the end of the race, or the client went away
     finally:
@@ -114,6 +137,7 @@ async def drive(websocket: WebSocket, race_id: str, races: Races) -> None:
 
 
 async def _send_states(websocket: WebSocket, session: RaceSession, driver: KartDriver, lock: asyncio.Lock) -> None:
+    events = DriveEvents(session.config.track, driver.index)
     seen = -1
     try:
         while True:
@@ -127,9 +151,14 @@ async def _send_states(websocket: WebSocket, session: RaceSession, driver: KartD
                     input_seq=driver.applied_seq,
                     braking=driver.braking,
                     kart=frame.karts[driver.index],
+                    countdown=frame.countdown,
+                    waiting_for=[d.name for d in session.waiting_for()],
                 )
+                happened = [EventMessage(kind=e.kind, text=e.text, time=e.time) for e in events.update(frame)]
                 async with lock:
                     await websocket.send_text(state.model_dump_json())
+                    for event in happened:
+                        await websocket.send_text(event.model_dump_json())
             if not session.live:
                 result = result_view(session.result) if session.result is not None else None
                 async with lock:

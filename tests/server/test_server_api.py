@@ -199,6 +199,8 @@ def test_telemetry_streams_frames_then_the_result(finished_race: dict[str, Any])
     steps = [f["step"] for f in frames if f["status"] == "running"]
     assert steps == sorted(steps) and steps[-1] > steps[0]
     assert any(f["karts"][1]["waypoints"] for f in frames)  # fixed-lqng's plan is drawn
+    finished = [k for f in frames for k in f["karts"] if k["finished"]]
+    assert finished and not any(k["waypoints"] or k["predicted"] for k in finished)  # until it finished
     assert frames[-1]["status"] == "finished"
     assert messages[-1]["type"] == "result" and messages[-1]["result"]["status"] == "finished"
     assert finished_race["close_code"] == 1000

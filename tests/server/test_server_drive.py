@@ -1,6 +1,7 @@
-"""Driving a human kart over the websocket of a real server (real time, 50 Hz): the kart moves and turns, bad
-connections are refused with 4xxx close codes, bad messages get an error and the connection and the race go on,
-a silent driver's kart brakes to a stop."""
+"""Driving a human kart over the websocket of a real server (real time, 50 Hz): the race waits for its driver's
+view and counts down with nothing moving, the kart moves and turns, events are told, bad connections are refused
+with 4xxx close codes, bad messages get an error and the connection and the race go on, a silent driver's kart
+brakes to a stop."""
 
 from __future__ import annotations
 
@@ -19,6 +20,8 @@ from websockets.sync.client import connect
 from websockets.sync.connection import Connection
 
 DRIVE_TIMEOUT_S = 0.3
+COUNTDOWN_S = 0.6
+VIEW_READY_WAIT_S = 2.0
 HUMAN_RACE = {
     "track": "oval",
     "laps": 3,
@@ -29,7 +32,14 @@ HUMAN_RACE = {
 @pytest.fixture(scope="module")
 def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
     db = tmp_path_factory.mktemp("drive") / "karting.db"
-    settings = server_settings(db, speedup=1.0, drive_timeout_s=DRIVE_TIMEOUT_S, viewer_enabled=True)
+    settings = server_settings(
+        db,
+        speedup=1.0,
+        drive_timeout_s=DRIVE_TIMEOUT_S,
+        viewer_enabled=True,
+        countdown_s=COUNTDOWN_S,
+        view_ready_wait_s=VIEW_READY_WAIT_S,
+    )
     with LiveServer(settings) as server:
         yield server
 
@@ -49,10 +59,13 @@ def race(client: httpx.Client) -> Iterator[dict[str, Any]]:
     client.post(f"/api/races/{created['id']}/stop")
 
 
-def drive_url(live: LiveServer, race: dict[str, Any], kart: int = 0, token: str | None = None) -> str:
-    """The drive websocket of ``kart`` (with its own token unless one is given)."""
+def drive_url(
+    live: LiveServer, race: dict[str, Any], kart: int = 0, token: str | None = None, view: str | None = None
+) -> str:
+    """The drive websocket of ``kart`` (with its own token unless one is given; ``view``: the view parameter)."""
     token = race["drive_tokens"].get(str(kart), "") if token is None else token
-    return f"{live.ws_url}/api/races/{race['id']}/drive?kart={kart}&token={token}"
+    url = f"{live.ws_url}/api/races/{race['id']}/drive?kart={kart}&token={token}"
+    return url if view is None else f"{url}&view={view}"
 
 
 class Driver:
@@ -62,6 +75,7 @@ class Driver:
         self.ws = ws
         self.states: list[dict[str, Any]] = []
         self.errors: list[str] = []
+        self.events: list[dict[str, Any]] = []
         self.seq = 0
 
     def drain(self, seconds: float = 0.0) -> None:
@@ -76,6 +90,8 @@ class Driver:
                 self.states.append(message)
             elif message["type"] == "error":
                 self.errors.append(message["error"])
+            elif message["type"] == "event":
+                self.events.append(message)
 
     def until(self, condition: Callable[[], object], timeout: float = 5.0) -> None:
         """Keep reading until ``condition()`` holds."""
@@ -153,6 +169,7 @@ def test_bad_connections_are_refused_with_close_codes(
     assert closed_with(f"{live.ws_url}/api/races/{race['id']}/drive?kart=abc&token=x")[0] == 4400
     assert closed_with(f"{live.ws_url}/api/races/{race['id']}/drive?kart=7&token=x")[0] == 4400
     assert closed_with(f"{live.ws_url}/api/races/nosuchrace/drive?kart=0&token=x")[0] == 4404
+    assert closed_with(drive_url(live, race, view="yes")) == (4400, "view must be 0 or 1")
     with connect(drive_url(live, race), open_timeout=10) as first:
         code, reason = closed_with(drive_url(live, race))
         assert code == 4409 and "already has a driver" in reason
@@ -178,6 +195,8 @@ def test_bad_messages_get_an_error_and_the_race_goes_on(
         '{"steer": 0, "throttle": 0, "boost": 1}': "boost: Extra inputs are not permitted",
         "[0.1, 0.2]": "Input should be an object",
         "x" * 5000: "message too long",
+        '{"type": "redy"}': "type: Input should be 'ready'",
+        '{"type": "ready", "steer": 0}': "steer: Extra inputs are not permitted",
     }
     with connect(drive_url(live, race), open_timeout=10) as ws:
         wait_status(client, race["id"], ("running",), 10)
@@ -220,3 +239,55 @@ def test_the_race_has_a_live_3d_view(live: LiveServer, client: httpx.Client, rac
     url = f"{live.ws_url}/races/{race['id']}/viewer"
     with connect(url, subprotocols=[f"viser-v{viser.__version__}"], open_timeout=10, max_size=None) as ws:  # type: ignore[list-item]
         assert isinstance(ws.recv(timeout=10), bytes)  # the relayed scene
+
+
+# ---------------------------------------------------------------------------------------------- a fair start
+def status_of(client: httpx.Client, race: dict[str, Any]) -> str:
+    status: str = client.get(f"/api/races/{race['id']}").json()["status"]
+    return status
+
+
+def test_the_race_waits_for_the_view_then_counts_down_with_nothing_moving(
+    live: LiveServer, client: httpx.Client, race: dict[str, Any]
+) -> None:
+    telemetry = connect(f"{live.ws_url}/api/races/{race['id']}/telemetry", open_timeout=10)
+    with telemetry, connect(drive_url(live, race, view="1"), open_timeout=10) as ws:
+        driver = Driver(ws)
+        driver.drive(0.0, 1.0, 0.5)  # throttle held while the view loads
+        assert status_of(client, race) == "waiting"  # connected, but the view is not ready
+        assert driver.states[-1]["waiting_for"] == ["Ada"] and driver.states[-1]["status"] == "waiting"
+        ws.send(json.dumps({"type": "ready"}))
+        driver.drive(0.0, 1.0, 0.1)
+        assert driver.states[-1]["waiting_for"] == []
+        driver.until(lambda: driver.states[-1]["status"] == "running", COUNTDOWN_S + 5)
+        driver.drive(0.0, 1.0, 1.0)
+        frames = []
+        while len(frames) < 200 and (not frames or frames[-1]["status"] != "running" or frames[-1]["step"] < 20):
+            frames.append(json.loads(telemetry.recv(timeout=5)))
+    counting = [s for s in driver.states if s["status"] == "countdown"]
+    assert len(counting) >= 3, "the countdown was not published"
+    left = [s["countdown"] for s in counting]
+    assert left == sorted(left, reverse=True) and left[0] <= COUNTDOWN_S and left[-1] > 0
+    grid = driver.states[0]["kart"]
+    before_go = [s for s in driver.states if s["status"] in ("waiting", "countdown")]
+    assert all(s["step"] == 0 and (s["kart"]["x"], s["kart"]["y"]) == (grid["x"], grid["y"]) for s in before_go)
+    assert all(s["countdown"] is None for s in driver.states if s["status"] != "countdown")
+    assert driver.kart["speed"] > 2.0  # then the held throttle moves the kart
+    assert [e["text"] for e in driver.events if e["kind"] == "start"] == ["Go!"]
+    # telemetry shows the countdown too, and no kart (the AI included) moved before the start
+    counted = [f for f in frames if f["status"] == "countdown"]
+    assert counted and all(f["countdown"] > 0 for f in counted)
+    first = {k["index"]: (k["x"], k["y"]) for k in frames[0]["karts"]}
+    assert all({k["index"]: (k["x"], k["y"]) for k in f["karts"]} == first for f in frames if f["step"] == 0)
+    assert frames[-1]["countdown"] is None and frames[-1]["karts"][1]["speed"] > 0.0
+
+
+def test_a_view_that_never_loads_delays_the_start_only_so_long(
+    live: LiveServer, client: httpx.Client, race: dict[str, Any]
+) -> None:
+    with connect(drive_url(live, race, view="1"), open_timeout=10) as ws:
+        driver = Driver(ws)
+        connected = time.monotonic()
+        driver.until(lambda: bool(driver.states) and driver.states[-1]["status"] == "countdown", 10)
+        waited = time.monotonic() - connected
+    assert VIEW_READY_WAIT_S - 0.3 < waited < VIEW_READY_WAIT_S + 2.0

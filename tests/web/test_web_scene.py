@@ -441,3 +441,56 @@ def test_labels_name_the_controller_once_and_the_hud_says_which_faults() -> None
     table = hud_text("oval", [("A", "lane-follower")], None)
     assert "| at fault | illegal LC | ctrl faults |" in table
     assert "collisions at fault" in legend_text() and "controller faults" in legend_text()
+
+
+CAMERA_MESSAGE = msgspec.msgpack.encode(
+    {
+        "type": "ViewerCameraMessage",
+        "wxyz": [1.0, 0.0, 0.0, 0.0],
+        "position": [0.0, -30.0, 30.0],
+        "fov": 1.0,
+        "near": 0.01,
+        "far": 1000.0,
+        "image_height": 480,
+        "image_width": 640,
+        "look_at": [0.0, 0.0, 0.0],
+        "up_direction": [0.0, 0.0, 1.0],
+    }
+)
+
+
+def test_a_viewer_that_asks_to_follow_a_kart_starts_chasing_it(relay_app: tuple[ServerThread, RaceScene]) -> None:
+    """``?follow=K`` on the viewer's websocket (the drive page's view) picks the "Follow" dropdown's start."""
+    server, _ = relay_app
+
+    async def follow_choice(query: str) -> str:
+        async with connect(server.port, f"/races/r1/viewer{query}") as ws:
+            await ws.send(CAMERA_MESSAGE)  # viser adds a client's own GUI once it reported its camera
+            messages = await receive_until(ws, lambda ms: any(m["type"] == "GuiDropdownMessage" for m in ms))
+        dropdown = next(m for m in messages if m["type"] == "GuiDropdownMessage")
+        assert dropdown["props"]["label"] == "Follow"
+        return str(dropdown["value"])
+
+    assert asyncio.run(follow_choice("?follow=1")) == "2: B"
+    assert asyncio.run(follow_choice("?follow=0")) == "1: A"
+    for ignored in ("", "?follow=7", "?follow=-1", "?follow=x", "?other=1"):
+        assert asyncio.run(follow_choice(ignored)) == "Free camera", ignored
+
+
+def test_hud_counts_down_and_drops_finished_karts_speed() -> None:
+    track = get_track("oval")
+    scene = RaceScene(track, [("A", "human"), ("B", "fixed-lqng")], "countdown")
+    try:
+        frame = make_frame(track, 2, status="countdown")
+        scene.update(RaceFrame(**{**frame.__dict__, "countdown": 2.4}))
+        assert "starts in 3" in scene._hud.content
+        running = make_frame(track, 2)
+        finished = KartFrame(**{**running.karts[1].__dict__, "finished": True, "finish_time": 40.5})
+        scene.update(RaceFrame(**{**running.__dict__, "karts": (running.karts[0], finished)}))
+        rows = {
+            name: row for row in scene._hud.content.splitlines() for name in ("Driver 0", "Driver 1") if name in row
+        }
+        assert "| 18 |" in rows["Driver 0"]  # 5 m/s
+        assert "| – |" in rows["Driver 1"] and "✓ 40.50 s" in rows["Driver 1"] and "| 22 |" not in rows["Driver 1"]
+    finally:
+        scene.close()

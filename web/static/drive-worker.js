@@ -1,5 +1,7 @@
-// Drive page worker: owns the drive websocket and sends the ramped input at 50 Hz on its own thread, so a busy
-// page (the 3D view renders on the page's thread, slowly with software WebGL) does not starve the kart of input.
+// Drive page worker: owns the drive websocket and sends the input at 50 Hz on its own thread, so a busy page (the
+// 3D view renders on the page's thread, slowly with software WebGL) does not starve the kart of input. Keys ramp
+// the input smoothly; while no key is pressed, a gamepad's analog values (read by the page) are sent as they are.
+// Once the page's 3D view is ready it says so to the server ({"type": "ready"}), again after a reconnect.
 "use strict";
 
 const SEND_PERIOD_MS = 20; // 50 Hz
@@ -12,10 +14,14 @@ const REPORT_PERIOD_MS = 100; // input shown on the page at 10 Hz
 
 let pressed = new Set();
 const input = {steer: 0, throttle: 0};
+let pad = {active: false, steer: 0, throttle: 0};
+let viewReady = false;
 let socket = null;
 let seq = 0;
 let lastTick = performance.now();
 let lastReport = 0;
+
+function clamp(value) { return Math.max(-1, Math.min(1, Number(value) || 0)); }
 
 function approach(value, target, rate, dt) {
   const step = rate * dt;
@@ -23,6 +29,11 @@ function approach(value, target, rate, dt) {
 }
 
 function ramp(dt) {
+  if (pressed.size === 0 && pad.active) {
+    input.steer = pad.steer;
+    input.throttle = pad.throttle;
+    return;
+  }
   const steerTarget = (pressed.has("left") ? 1 : 0) - (pressed.has("right") ? 1 : 0); // steer > 0 = left
   const reversing = steerTarget !== 0 && input.steer !== 0 && Math.sign(steerTarget) !== Math.sign(input.steer);
   input.steer = approach(input.steer, steerTarget, steerTarget === 0 || reversing ? STEER_RETURN_RATE : STEER_RATE, dt);
@@ -52,7 +63,10 @@ function connect(url) {
   if (socket) socket.close(1000, "reconnecting");
   const ws = new WebSocket(url);
   socket = ws;
-  ws.addEventListener("open", () => postMessage({kind: "open"}));
+  ws.addEventListener("open", () => {
+    if (viewReady) ws.send(JSON.stringify({type: "ready"}));
+    postMessage({kind: "open"});
+  });
   ws.addEventListener("message", (event) => postMessage({kind: "message", data: String(event.data)}));
   ws.addEventListener("error", () => postMessage({kind: "error"}));
   ws.addEventListener("close", (event) => {
@@ -65,6 +79,11 @@ onmessage = (event) => {
   const command = event.data || {};
   if (command.cmd === "connect") connect(command.url);
   else if (command.cmd === "keys") pressed = new Set(command.pressed || []);
+  else if (command.cmd === "pad") pad = {active: Boolean(command.active), steer: clamp(command.steer), throttle: clamp(command.throttle)};
+  else if (command.cmd === "ready") {
+    viewReady = true;
+    if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify({type: "ready"}));
+  }
   else if (command.cmd === "close" && socket) socket.close(1000, "page closed");
 };
 

@@ -1,7 +1,7 @@
 // Start page: the live and finished races (polled), and the form that launches a race.
 "use strict";
 
-const LIVE = new Set(["starting", "waiting", "running", "live", "created", "pending"]);
+const LIVE = new Set(["starting", "waiting", "countdown", "running", "live", "created", "pending"]);
 let tracks = [];
 let controllers = [];
 // GET /api/limits: what the API accepts (the form allows the same) and the default kart names
