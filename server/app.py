@@ -16,12 +16,16 @@ from fastapi import APIRouter, FastAPI
 
 from controllers.registry import REGISTRY, ControllerSpec
 from server.db import RaceDatabase
+from server.edge import install_edge
 from server.hosts import ControllerHosts
 from server.live import LiveRaces
+from server.log_redaction import install_token_redaction
 from server.loop import make_ordinary, make_realtime
+from server.openapi_doc import truthful_openapi
 from server.planning import PlannerPool
 from server.race_config import HUMAN
 from server.routes import api_router
+from server.routes.catalogue import track_names
 from server.services import RaceServices, SceneFactory
 from server.settings import Settings
 from server.tournament_db import TournamentDatabase
@@ -72,6 +76,7 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        install_token_redaction()  # after the server configured its logging
         switch_interval = sys.getswitchinterval()
         if settings.realtime_priority:
             if make_realtime(settings.realtime_priority):
@@ -113,6 +118,8 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
 
     app = FastAPI(title="HeadToHead Karting", description=DESCRIPTION, version="0.1.0", lifespan=lifespan)
     app.state.settings = settings
+    install_edge(app, settings)
+    truthful_openapi(app, settings, catalogue, track_names)
     app.state.tournament_plots = TournamentPlots()
     app.include_router(api_router)
     web = _web_router(lambda: app.state.races)

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 from dataclasses import fields
 from datetime import datetime
-from typing import TYPE_CHECKING, Any, Literal, get_type_hints
+from typing import TYPE_CHECKING, Annotated, Any, Literal, get_type_hints
 
-from pydantic import BaseModel, ConfigDict, Field, create_model
+from pydantic import BaseModel, ConfigDict, Field, StringConstraints, create_model
 
 from server.race_config import ParamValue
 from server.results import DriverFaults, record_name
@@ -19,6 +19,28 @@ from sim_core.world import KartResult
 from web.frame import KartFrame
 
 MAX_SEED = 2**31 - 1
+# every list and string a request can carry is bounded (with the body size, server.edge), so that no request
+# costs more than a few milliseconds to parse and check on the event loop
+MAX_KARTS = 8
+MAX_NAME_CHARS = 64  # track, controller, agent and parameter names
+MAX_PARAMS = 32  # parameters changed per kart
+MAX_PARAM_TEXT = 200  # a text parameter's value
+MAX_LANES = 4  # every built-in track has four lanes; the track's own count is checked in server.routes.races
+MAX_LAPS = 1000  # a bound on the type; the server's own limit is the setting max_laps
+
+Name = Annotated[str, StringConstraints(min_length=1, max_length=MAX_NAME_CHARS)]
+BoundedParamValue = (
+    bool
+    | int
+    | Annotated[float, Field(allow_inf_nan=False)]
+    | Annotated[str, StringConstraints(max_length=MAX_PARAM_TEXT)]
+)
+
+
+class ErrorOut(BaseModel):
+    """An error answer: what was wrong."""
+
+    detail: str
 
 
 class TrackOut(BaseModel):
@@ -46,10 +68,12 @@ class KartIn(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    controller: str = Field(min_length=1, max_length=64, description="a name from GET /api/controllers")
+    controller: str = Field(min_length=1, max_length=MAX_NAME_CHARS, description="a name from GET /api/controllers")
     name: str | None = Field(None, min_length=1, max_length=40, description="display name")
-    params: dict[str, ParamValue] = Field(
-        default_factory=dict, description="controller parameters to change (names from GET /api/controllers)"
+    params: dict[Name, BoundedParamValue] = Field(
+        default_factory=dict,
+        max_length=MAX_PARAMS,
+        description="controller parameters to change (names from GET /api/controllers)",
     )
 
 
@@ -58,12 +82,17 @@ class RaceIn(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    track: str = Field(description="a name from GET /api/tracks")
-    laps: int | None = Field(None, ge=1, description="default: the track's laps")
+    track: str = Field(min_length=1, max_length=MAX_NAME_CHARS, description="a name from GET /api/tracks")
+    laps: int | None = Field(None, ge=1, le=MAX_LAPS, description="default: the track's laps")
     seed: int = Field(0, ge=0, le=MAX_SEED, description="seed of the planners")
-    start_lanes: list[int] | None = Field(None, description="one start lane (1-based) per kart; default 2, 3, 1, 4")
+    start_lanes: list[Annotated[int, Field(ge=1, le=MAX_LANES)]] | None = Field(
+        None,
+        min_length=1,
+        max_length=MAX_KARTS,
+        description="one start lane (1-based) per kart, as many as karts; default 2, 3, 1, 4",
+    )
     kart_preset: Literal["paper", "original"] = "paper"
-    karts: list[KartIn] = Field(min_length=1, max_length=8)
+    karts: list[KartIn] = Field(min_length=1, max_length=MAX_KARTS)
 
 
 class KartOut(BaseModel):
