@@ -51,6 +51,15 @@ def _document_edge(schema: JSONObject, settings: Settings) -> None:
                 responses.setdefault(code, response)
 
 
+def _document_api_key(schema: JSONObject, settings: Settings) -> None:
+    """Without an API key set, no operation needs one: the schema says so (the 401 answers stay documented)."""
+    if settings.api_key is not None:
+        return
+    for operations in schema.get("paths", {}).values():
+        for operation in operations.values():
+            operation.pop("security", None)
+
+
 def _parameter_schema(parameter: Parameter) -> JSONObject:
     out: JSONObject = {"type": _JSON_TYPES[parameter.type], "description": parameter.description}
     if parameter.type in ("int", "float"):
@@ -148,6 +157,7 @@ def truthful_openapi(
         if app.openapi_schema is None:
             schema = derive()
             _document_edge(schema, settings)
+            _document_api_key(schema, settings)
             _describe_choices(schema, settings, catalogue, tracks())
             _link_races(schema)
             app.openapi_schema = schema
