@@ -9,6 +9,7 @@ then the database or the 422 answer, which failed with a 500. :func:`strict_load
 
 from __future__ import annotations
 
+import asyncio
 import json
 import math
 import re
@@ -18,7 +19,10 @@ from typing import Any
 from fastapi import Request, Response
 from fastapi.routing import APIRoute
 
-MAX_INT_DIGITS = 30  # far beyond every integer the API takes (seeds are below 2**31)
+# [bytes] bodies up to this size are parsed on the event loop (well under a millisecond); larger ones, up to
+# the body limit (server.edge.BodyLimit), take a few milliseconds and are parsed in a thread, which gives the
+# loop the GIL back every switch interval (server.settings.switch_interval_s)
+LOOP_PARSE_BYTES = 4096
 
 # a surrogate escape; whether it is half of a pair is decided on the parsed value, this only locates it
 _SURROGATE_ESCAPE = re.compile(r"\\u[dD][89a-fA-F][0-9a-fA-F]{2}")
@@ -33,13 +37,6 @@ def _finite_float(text: str) -> float:
     if not math.isfinite(value):
         raise ValueError(f"{text[:40]} is out of range: numbers must be finite")
     return value
-
-
-def _bounded_int(text: str) -> int:
-    digits = text.lstrip("-")
-    if len(digits) > MAX_INT_DIGITS:
-        raise ValueError(f"an integer of {len(digits)} digits is out of range (at most {MAX_INT_DIGITS})")
-    return int(text)
 
 
 def _lone_surrogate_at(value: Any, path: tuple[str | int, ...] = ()) -> tuple[str | int, ...] | None:
@@ -73,13 +70,17 @@ def strict_loads(body: bytes | str) -> Any:
     else:
         text = body
     try:
-        value = json.loads(text, parse_constant=_reject_constant, parse_float=_finite_float, parse_int=_bounded_int)
+        # integers need no hook: Python refuses those over 4,300 digits (ValueError) and the models bound the rest
+        value = json.loads(text, parse_constant=_reject_constant, parse_float=_finite_float)
     except ValueError as exc:
         if isinstance(exc, json.JSONDecodeError):
             raise
-        # raised by a parse_* hook: the decoder does not say where, so point at the start
+        # raised by a hook or by int(): the decoder does not say where, so point at the start
         raise json.JSONDecodeError(str(exc), text, 0) from None
-    where = _lone_surrogate_at(value)
+    except RecursionError:
+        raise json.JSONDecodeError("nested too deeply", text, 0) from None
+    # only an escape can make a lone surrogate (the text is valid UTF-8): look at the value only if there is one
+    where = _lone_surrogate_at(value) if _SURROGATE_ESCAPE.search(text) else None
     if where is not None:
         shown = ".".join(str(p) for p in where) or "the body"
         escape = _SURROGATE_ESCAPE.search(text)
@@ -93,9 +94,13 @@ class StrictJSONRequest(Request):
     """A request whose :meth:`json` is :func:`strict_loads`."""
 
     async def json(self) -> Any:
-        """The body as strict JSON (parsed once)."""
+        """The body as strict JSON (parsed once; a larger body in a worker thread, off the event loop)."""
         if not hasattr(self, "_json"):
-            self._json = strict_loads(await self.body())
+            body = await self.body()
+            if len(body) > LOOP_PARSE_BYTES:
+                self._json = await asyncio.to_thread(strict_loads, body)
+            else:
+                self._json = strict_loads(body)
         return self._json
 
 
