@@ -27,7 +27,7 @@ from server.race_config import HUMAN
 from server.routes import api_router
 from server.routes.catalogue import track_names
 from server.services import RaceServices, SceneFactory
-from server.settings import Settings
+from server.settings import Settings, is_loopback
 from server.tournament_db import TournamentDatabase
 from server.tournament_plots import TournamentPlots
 from server.tournaments import TournamentRunner
@@ -135,6 +135,8 @@ def serve(settings: Settings) -> None:
 
     shown = "localhost" if settings.host in ("127.0.0.1", "0.0.0.0", "::") else settings.host
     print(f"HeadToHead Karting server: open http://{shown}:{settings.port}/ (API docs at /docs)", flush=True)
+    if not is_loopback(settings.host) and (settings.allowed_hosts is None or settings.api_key is None):
+        print("exposed: set KARTING_ALLOWED_HOSTS and KARTING_API_KEY (README: Exposed deployment)", flush=True)
     uvicorn.run(
         create_app(settings),
         host=settings.host,
