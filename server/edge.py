@@ -32,6 +32,7 @@ from server.settings import Settings
 SHOWN_CHARS = 120  # an echoed string is cut to this many characters
 SHOWN_ITEMS = 8  # an echoed list or object with more entries is summarised
 SHOWN_DEPTH = 3
+SHOWN_ERRORS = 20  # a 422 lists at most this many problems (then how many more)
 MESSAGE_CHARS = 600  # messages are the server's own, naming at most a short input and a list of names
 MAX_CLOSE_REASON_BYTES = 123  # RFC 6455: a close frame's reason
 
@@ -87,7 +88,12 @@ def bounded_error(error: dict[str, Any]) -> dict[str, Any]:
 async def validation_error_answer(request: Request, exc: Exception) -> JSONResponse:
     """422 listing what was wrong (FastAPI's shape), each echoed value bounded (:func:`bounded`)."""
     assert isinstance(exc, RequestValidationError)
-    return JSONResponse({"detail": [bounded_error(dict(e)) for e in exc.errors()]}, status_code=422)
+    errors = exc.errors()
+    detail = [bounded_error(dict(e)) for e in errors[:SHOWN_ERRORS]]
+    if len(errors) > SHOWN_ERRORS:
+        more = len(errors) - SHOWN_ERRORS
+        detail.append({"type": "too_many_errors", "loc": ["body"], "msg": f"and {more} more errors, not shown"})
+    return JSONResponse({"detail": detail}, status_code=422)
 
 
 # ------------------------------------------------------------------------------------------- body size
