@@ -19,16 +19,19 @@ from fastapi_offline import FastAPIOffline
 
 from controllers.registry import REGISTRY, ControllerSpec
 from server.db import RaceDatabase
+from server.edge import install_edge
 from server.hosts import ControllerHosts
 from server.live import LiveRaces
+from server.log_redaction import install_token_redaction
 from server.loop import make_ordinary, make_realtime
+from server.openapi_doc import truthful_openapi
 from server.planning import PlannerPool
 from server.race_config import HUMAN
 from server.replays import RecordedRace, RecordedRaces, ReplayScenes, ReplayView, StoredReplays
 from server.routes import api_router
-from server.routes.catalogue import load_track
+from server.routes.catalogue import load_track, track_names
 from server.services import RaceServices, SceneFactory
-from server.settings import Settings
+from server.settings import Settings, is_loopback
 from server.tournament_db import TournamentDatabase
 from server.tournament_plots import TournamentPlots
 from server.tournaments import TournamentRunner
@@ -146,6 +149,20 @@ def _offline_docs_app(lifespan: Callable[[FastAPI], AbstractAsyncContextManager[
     return app
 
 
+def _tune_scheduling(settings: Settings) -> float:
+    """Real-time priority (when asked for and allowed) and the GIL switch interval; returns the previous
+    interval."""
+    switch_interval = sys.getswitchinterval()
+    if settings.realtime_priority:
+        if make_realtime(settings.realtime_priority):
+            log.info("the server runs at SCHED_FIFO priority %d", settings.realtime_priority)
+        else:
+            log.warning("real-time priority not allowed here (needs CAP_SYS_NICE); running as usual")
+    # the event loop waits at most about this long for a busy thread to give up the GIL
+    sys.setswitchinterval(settings.switch_interval_s)
+    return switch_interval
+
+
 def create_app(settings: Settings | None = None, *, controllers: Mapping[str, ControllerSpec] | None = None) -> FastAPI:
     """The race server. ``controllers`` replaces the public registry (tests add faulty drivers this way)."""
     settings = settings or Settings()
@@ -156,14 +173,8 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        switch_interval = sys.getswitchinterval()
-        if settings.realtime_priority:
-            if make_realtime(settings.realtime_priority):
-                log.info("the server runs at SCHED_FIFO priority %d", settings.realtime_priority)
-            else:
-                log.warning("real-time priority not allowed here (needs CAP_SYS_NICE); running as usual")
-        # the event loop waits at most about this long for a busy thread to give up the GIL
-        sys.setswitchinterval(settings.switch_interval_s)
+        install_token_redaction()  # after the server configured its logging
+        switch_interval = _tune_scheduling(settings)
         db = await asyncio.to_thread(RaceDatabase, settings.database_url)
         aborted = await asyncio.to_thread(db.abort_unfinished)
         if aborted:
@@ -200,6 +211,8 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
 
     app = _offline_docs_app(lifespan)
     app.state.settings = settings
+    install_edge(app, settings)
+    truthful_openapi(app, settings, catalogue, track_names)
     app.state.tournament_plots = TournamentPlots()
     app.include_router(api_router)
     web = _web_router(lambda: app.state.races, StoredReplays(lambda: app.state.races, lambda: app.state.replay_scenes))
@@ -215,6 +228,8 @@ def serve(settings: Settings) -> None:
 
     shown = "localhost" if settings.host in ("127.0.0.1", "0.0.0.0", "::") else settings.host
     print(f"HeadToHead Karting server: open http://{shown}:{settings.port}/ (API docs at /docs)", flush=True)
+    if not is_loopback(settings.host) and (settings.allowed_hosts is None or settings.api_key is None):
+        print("exposed: set KARTING_ALLOWED_HOSTS and KARTING_API_KEY (README: Exposed deployment)", flush=True)
     uvicorn.run(
         create_app(settings),
         host=settings.host,

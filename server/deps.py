@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+import secrets
+from typing import Annotated, Any
 
-from fastapi import Depends
+from fastapi import Depends, HTTPException, Security, status
 from fastapi.requests import HTTPConnection
+from fastapi.security import APIKeyHeader
 
 from server.live import LiveRaces
+from server.models import ErrorOut
 from server.replays import RecordedRaces
+from server.settings import Settings
 from server.tournament_plots import TournamentPlots
 from server.tournaments import TournamentRunner
 
@@ -47,3 +51,35 @@ def get_tournament_plots(connection: HTTPConnection) -> TournamentPlots:
 
 
 TournamentPlotsDep = Annotated[TournamentPlots, Depends(get_tournament_plots)]
+
+
+API_KEY_HEADER = "X-API-Key"
+_api_key_header = APIKeyHeader(
+    name=API_KEY_HEADER,
+    auto_error=False,
+    description="the server's API key (KARTING_API_KEY); needed only when the server has one",
+)
+
+
+def require_api_key(connection: HTTPConnection, given: Annotated[str | None, Security(_api_key_header)]) -> None:
+    """When the server has an API key (``KARTING_API_KEY``), refuse a request without it (401) or with another
+    one (403); with none set, every request passes."""
+    # an app built without settings (a bare router in tests) has no key either
+    settings: Settings | None = getattr(connection.app.state, "settings", None)
+    if settings is None or settings.api_key is None:
+        return
+    if not given:
+        raise HTTPException(
+            status.HTTP_401_UNAUTHORIZED,
+            f"this server needs its API key in the {API_KEY_HEADER} header",
+            headers={"WWW-Authenticate": API_KEY_HEADER},
+        )
+    if not secrets.compare_digest(given.encode(), settings.api_key.get_secret_value().encode()):
+        raise HTTPException(status.HTTP_403_FORBIDDEN, f"wrong API key in the {API_KEY_HEADER} header")
+
+
+ApiKey = Depends(require_api_key)
+API_KEY_RESPONSES: dict[int | str, dict[str, Any]] = {
+    401: {"model": ErrorOut, "description": f"the server has an API key and the {API_KEY_HEADER} header is missing"},
+    403: {"model": ErrorOut, "description": "a wrong API key, or a page of a site not allowed (allowed_origins)"},
+}

@@ -28,6 +28,9 @@ class LiveRaces:
         self.services = services
         self.settings = services.settings
         self.sessions: dict[str, RaceSession] = {}
+        # creates past the limit check and not registered yet: they hold a slot, so that concurrent creates
+        # cannot all pass the check while the first ones wait for the database
+        self._reserved = 0
 
     def get(self, race_id: str) -> RaceSession | None:
         """A race held in memory, or ``None``."""
@@ -49,9 +52,20 @@ class LiveRaces:
         return session.status if session is not None else self.services.db.status(race_id)
 
     async def create(self, config: RaceConfig) -> RaceSession:
-        """Store and start a race; raises :class:`TooManyRacesError` when the server is full."""
-        if self.live_count() >= self.settings.max_sessions:
+        """Store and start a race; raises :class:`TooManyRacesError` when the server is full.
+
+        The check and the slot's reservation happen with no ``await`` between them (one step of the event loop,
+        which is the lock here), and the slot stays reserved until the race is registered as live or the
+        create fails."""
+        if self.live_count() + self._reserved >= self.settings.max_sessions:
             raise TooManyRacesError(f"{self.settings.max_sessions} races are running; try again when one ends")
+        self._reserved += 1
+        try:
+            return await self._create(config)
+        finally:
+            self._reserved -= 1
+
+    async def _create(self, config: RaceConfig) -> RaceSession:
         race_id = secrets.token_hex(6)
         tokens = {kart.index: secrets.token_urlsafe(16) for kart in config.karts if kart.human}
         session = RaceSession(race_id, config, tokens, self.services)

@@ -8,12 +8,23 @@ from __future__ import annotations
 
 from dataclasses import fields
 from datetime import datetime
-from typing import TYPE_CHECKING, Any, Literal, get_type_hints
+from typing import TYPE_CHECKING, Annotated, Any, Literal, get_type_hints
 
-from pydantic import BaseModel, ConfigDict, Field, create_model
+from pydantic import BaseModel, ConfigDict, Field, StringConstraints, create_model
 
 from server.drive_events import DRIVE_EVENT_KINDS
-from server.limits import MAX_KARTS, MAX_NAME_LENGTH, MAX_SEED, MIN_KARTS, MIN_LAPS
+from server.limits import (
+    MAX_KARTS,
+    MAX_LANES,
+    MAX_LAPS,
+    MAX_NAME_CHARS,
+    MAX_NAME_LENGTH,
+    MAX_PARAM_TEXT,
+    MAX_PARAMS,
+    MAX_SEED,
+    MIN_KARTS,
+    MIN_LAPS,
+)
 from server.race_config import ParamValue
 from server.results import DriverFaults, record_name
 from server.status import RaceStatus
@@ -25,6 +36,20 @@ CONTROLLER_FAULTS_DOC = (
     "(not collisions: those are collisions_at_fault)"
 )
 INDEX_DOC = "the kart's grid slot from 0 (pages and the command line show kart numbers from 1: index + 1)"
+
+Name = Annotated[str, StringConstraints(min_length=1, max_length=MAX_NAME_CHARS)]
+BoundedParamValue = (
+    bool
+    | int
+    | Annotated[float, Field(allow_inf_nan=False)]
+    | Annotated[str, StringConstraints(max_length=MAX_PARAM_TEXT)]
+)
+
+
+class ErrorOut(BaseModel):
+    """An error answer: what was wrong."""
+
+    detail: str
 
 
 class TrackOut(BaseModel):
@@ -52,15 +77,19 @@ class KartIn(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    controller: str = Field(min_length=1, max_length=64, description="a name from GET /api/controllers")
+    controller: str = Field(min_length=1, max_length=MAX_NAME_CHARS, description="a name from GET /api/controllers")
     name: str | None = Field(
         None,
         min_length=1,
         max_length=MAX_NAME_LENGTH,
-        description="display name, unique in the race (default: controller and kart number, e.g. 'mcts-lqng 1')",
+        pattern=r"\S",  # not blank (the schema says so too: JSON Schema patterns match anywhere in the string)
+        description="display name, not blank and unique in the race, compared without case (default: controller "
+        "and kart number, e.g. 'mcts-lqng 1')",
     )
-    params: dict[str, ParamValue] = Field(
-        default_factory=dict, description="controller parameters to change (names from GET /api/controllers)"
+    params: dict[Name, BoundedParamValue] = Field(
+        default_factory=dict,
+        max_length=MAX_PARAMS,
+        description="controller parameters to change (names from GET /api/controllers)",
     )
 
 
@@ -69,10 +98,17 @@ class RaceIn(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    track: str = Field(description="a name from GET /api/tracks")
-    laps: int | None = Field(None, ge=MIN_LAPS, description="default: the track's laps; at most GET /api/limits")
+    track: str = Field(min_length=1, max_length=MAX_NAME_CHARS, description="a name from GET /api/tracks")
+    laps: int | None = Field(
+        None, ge=MIN_LAPS, le=MAX_LAPS, description="default: the track's laps; at most GET /api/limits"
+    )
     seed: int = Field(0, ge=0, le=MAX_SEED, description="seed of the planners")
-    start_lanes: list[int] | None = Field(None, description="one start lane (1-based) per kart; default 2, 3, 1, 4")
+    start_lanes: list[Annotated[int, Field(ge=1, le=MAX_LANES)]] | None = Field(
+        None,
+        min_length=1,
+        max_length=MAX_KARTS,
+        description="one start lane (1-based) per kart, as many as karts; default 2, 3, 1, 4",
+    )
     kart_preset: Literal["paper", "original"] = "paper"
     karts: list[KartIn] = Field(min_length=MIN_KARTS, max_length=MAX_KARTS)
 

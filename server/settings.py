@@ -2,8 +2,17 @@
 
 from __future__ import annotations
 
-from pydantic import Field
-from pydantic_settings import BaseSettings, SettingsConfigDict
+import ipaddress
+import json
+from typing import Annotated, Any
+
+from pydantic import Field, SecretStr, field_validator
+from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
+
+LOOPBACK_HOSTS = ("localhost", "127.0.0.1", "::1")
+
+# a list setting from the environment: comma-separated (``a.example,b.example``) or a JSON list
+NameList = Annotated[list[str], NoDecode]
 
 
 class Settings(BaseSettings):
@@ -67,3 +76,54 @@ class Settings(BaseSettings):
     switch_interval_s: float = Field(
         default=0.0005, gt=0.0, description="[s] sys.setswitchinterval: how long a busy thread may keep the GIL"
     )
+
+    # ---------------------------------------------------------------- the edge: exposed deployments (server.edge)
+    max_body_bytes: int = Field(
+        default=64 * 1024, ge=1024, description="[bytes] larger request bodies are refused with 413 before parsing"
+    )
+    api_key: SecretStr | None = Field(
+        default=None,
+        description="when set, creating and stopping races and tournaments needs this key in the X-API-Key header",
+    )
+    allowed_hosts: NameList | None = Field(
+        default=None,
+        description="Host header names served (HTTP and websockets; '*' any, '*.example.org' subdomains); "
+        "default: the loopback names when bound to a loopback address, any otherwise",
+    )
+    allowed_origins: NameList = Field(
+        default_factory=list,
+        description="Origin headers accepted besides those on an allowed host (e.g. https://karts.example.org)",
+    )
+    cors_origins: NameList = Field(
+        default_factory=list, description="origins given CORS access to the API (default: none, no CORS headers)"
+    )
+
+    @field_validator("allowed_hosts", "allowed_origins", "cors_origins", mode="before")
+    @classmethod
+    def _comma_separated(cls, value: Any) -> Any:
+        if isinstance(value, str):
+            value = value.strip()
+            if value.startswith("["):
+                return json.loads(value)
+            return [part.strip() for part in value.split(",") if part.strip()]
+        return value
+
+    def served_hosts(self) -> list[str]:
+        """The Host names served: ``allowed_hosts``, or by default the loopback names when bound to loopback and
+        any host (``*``) otherwise."""
+        if self.allowed_hosts is not None:
+            return [h.lower() for h in self.allowed_hosts]
+        if is_loopback(self.host):
+            return list(LOOPBACK_HOSTS)
+        return ["*"]
+
+
+def is_loopback(host: str) -> bool:
+    """Whether ``host`` (a name or address to bind or serve) is this machine's loopback."""
+    name = host.strip("[]").lower()
+    if name == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(name).is_loopback
+    except ValueError:
+        return False

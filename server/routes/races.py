@@ -18,19 +18,20 @@ from fastapi.responses import JSONResponse
 from controllers.registry import ControllerSpec
 from server.controller_params import check_params
 from server.db import StoredRace
-from server.deps import Races, Recorded
+from server.deps import API_KEY_RESPONSES, ApiKey, Races, Recorded
 from server.limits import default_kart_name
 from server.live import LiveRaces, TooManyRacesError
-from server.models import RaceCreatedOut, RaceDetailOut, RaceIn, RaceSummaryOut, ResultOut, TicksOut
+from server.models import ErrorOut, RaceCreatedOut, RaceDetailOut, RaceIn, RaceSummaryOut, ResultOut, TicksOut
 from server.race_config import HUMAN, KartEntry, RaceConfig
 from server.race_report import RaceReport
 from server.routes.catalogue import load_track, track_names
 from server.status import OVER_STATUSES, RaceStatus
+from server.strict_json import StrictJSONRoute
 from server.views import created_view, detail_view, result_view, summary_view, ticks_view
 
 LIST_LIMIT = 200
 
-router = APIRouter()
+router = APIRouter(route_class=StrictJSONRoute)
 
 
 def kart_names(body: RaceIn) -> list[str]:
@@ -129,11 +130,15 @@ def _not_over(race_id: str, race_status: RaceStatus) -> HTTPException:
     "/races",
     status_code=status.HTTP_201_CREATED,
     response_model=RaceCreatedOut,
+    dependencies=[ApiKey],
     responses={
+        **API_KEY_RESPONSES,
         422: {
             "description": "unknown track, controller or controller parameter, bad laps, lanes, seed or parameter "
-            "value, too many karts, a kart name too long or given twice (limits: GET /api/limits)"
-        }
+            "value, too many karts, a kart name too long or given twice (limits: GET /api/limits); a body that is "
+            "not strict JSON"
+        },
+        429: {"model": ErrorOut, "description": "the server runs its most races at once (max_sessions)"},
     },
 )
 async def create_race(body: RaceIn, races: Races) -> RaceCreatedOut:
@@ -169,7 +174,12 @@ async def get_race(race_id: str, races: Races) -> RaceDetailOut:
 @router.post(
     "/races/{race_id}/stop",
     response_model=RaceDetailOut,
-    responses={404: {"description": "no such race"}, 409: {"description": "the race is already over"}},
+    dependencies=[ApiKey],
+    responses={
+        **API_KEY_RESPONSES,
+        404: {"description": "no such race"},
+        409: {"description": "the race is already over"},
+    },
 )
 async def stop_race(race_id: str, races: Races) -> RaceDetailOut:
     """End a live race now (status ``stopped``; its state so far is stored as its result)."""

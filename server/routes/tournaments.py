@@ -20,12 +20,14 @@ from arena.records import RaceFigures
 from arena.report import METRIC_TITLES, plan_rows, plot_stems, safety_rows, win_rows
 from arena.stats import COMBINED, Standing, leaderboard, tournament_stats
 from arena.tournament import TournamentSpec
-from server.deps import TournamentPlotsDep, Tournaments
+from server.deps import API_KEY_RESPONSES, ApiKey, TournamentPlotsDep, Tournaments
 from server.limits import MAX_SEED
+from server.models import ErrorOut, Name
+from server.strict_json import StrictJSONRoute
 from server.tournament_db import TOURNAMENT_ID, StoredTournament, TournamentRace
 from server.tournaments import TooManyTournamentsError, TournamentConflictError, TournamentRunner
 
-router = APIRouter()
+router = APIRouter(route_class=StrictJSONRoute)
 MAX_RACES_PER_PAIR = 500
 RESERVED_IDS = frozenset({"leaderboard"})  # GET /api/tournaments/leaderboard is the leaderboard
 MAX_LEADERBOARD_TOURNAMENTS = 10_000
@@ -36,8 +38,8 @@ class TournamentIn(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    agents: list[str] = Field(min_length=2, max_length=12, description="names from GET /api/controllers")
-    tracks: list[str] = Field(default=["oval", "complex"], min_length=1, max_length=8)
+    agents: list[Name] = Field(min_length=2, max_length=12, description="names from GET /api/controllers")
+    tracks: list[Name] = Field(default=["oval", "complex"], min_length=1, max_length=8)
     races_per_pair: int = Field(default=50, ge=1, le=MAX_RACES_PER_PAIR, description="per pair and track")
     seed: int = Field(default=0, ge=0, le=MAX_SEED)
     laps: int | None = Field(default=None, ge=1, le=20, description="default: each track's")
@@ -210,10 +212,12 @@ async def _stored_or_404(runner: TournamentRunner, tournament_id: str) -> Stored
     "/tournaments",
     status_code=status.HTTP_202_ACCEPTED,
     response_model=TournamentOut,
+    dependencies=[ApiKey],
     responses={
-        409: {"description": "the id is running, or taken by other settings"},
-        422: {"description": "unknown agents or tracks, bad numbers"},
-        429: {"description": "too many tournaments running"},
+        **API_KEY_RESPONSES,
+        409: {"model": ErrorOut, "description": "the id is running, or taken by other settings"},
+        422: {"description": "unknown agents or tracks, bad numbers; a body that is not strict JSON"},
+        429: {"model": ErrorOut, "description": "too many tournaments running (max_tournaments)"},
     },
 )
 async def start_tournament(body: TournamentIn, tournaments: Tournaments) -> TournamentOut:
@@ -367,7 +371,12 @@ async def tournament_statistics(tournament_id: str, tournaments: Tournaments) ->
 @router.post(
     "/tournaments/{tournament_id}/stop",
     response_model=TournamentOut,
-    responses={404: {"description": "no such tournament"}, 409: {"description": "not running here"}},
+    dependencies=[ApiKey],
+    responses={
+        **API_KEY_RESPONSES,
+        404: {"description": "no such tournament"},
+        409: {"description": "not running here"},
+    },
 )
 async def stop_tournament(tournament_id: str, tournaments: Tournaments) -> TournamentOut:
     """Stop a running tournament after the races in flight (``stopped``; POST it again to resume)."""

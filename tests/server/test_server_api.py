@@ -81,7 +81,7 @@ def test_controllers_list_the_registry_and_human(client: httpx.Client) -> None:
         ({"karts": [{"controller": "lane-follower"}] * 9}, ["body", "karts"], "at most 8"),
         ({"karts": []}, ["body", "karts"], "at least 1"),
         ({"start_lanes": [1, 2, 3]}, ["body", "start_lanes"], "one start lane per kart"),
-        ({"start_lanes": [1, 7]}, ["body", "start_lanes", 1], "lanes are 1..4, got 7"),
+        ({"start_lanes": [1, 7]}, ["body", "start_lanes", 1], "less than or equal to 4"),
         ({"seed": -1}, ["body", "seed"], "greater than or equal to 0"),
         ({"seed": "abc"}, ["body", "seed"], "valid integer"),
         ({"kart_preset": "rocket"}, ["body", "kart_preset"], "'paper' or 'original'"),
