@@ -238,7 +238,9 @@ class DriveInput(BaseModel):
 
     steer: float = Field(ge=-1.0, le=1.0, allow_inf_nan=False, description="positive = left")
     throttle: float = Field(ge=-1.0, le=1.0, allow_inf_nan=False, description="negative brakes")
-    seq: int | None = Field(None, description="echoed back as input_seq in the state after it is applied")
+    seq: int | None = Field(
+        None, ge=0, le=2**53, description="echoed back as input_seq in the state after it is applied"
+    )
 
 
 # ----------------------------------------------------------------------------------------- websocket messages
@@ -248,6 +250,7 @@ CLOSE_FORBIDDEN = 4403
 CLOSE_NOT_FOUND = 4404
 CLOSE_TAKEN = 4409
 CLOSE_OVER = 4410
+CLOSE_TOO_BIG = 1009  # RFC 6455 "message too big": over the socket's limit (server.routes.sockets)
 
 
 class StateMessage(BaseModel):

@@ -31,7 +31,9 @@ class Settings(BaseSettings):
     drive_timeout_s: float = Field(
         default=0.5, gt=0.0, description="[s] wall time without driver input before the kart brakes"
     )
-    human_wait_s: float = Field(default=120.0, ge=0.0, description="[s] a race waits this long for its human drivers")
+    human_wait_s: float = Field(
+        default=60.0, ge=0.0, description="[s] a race waits this long for its human drivers, then is cancelled"
+    )
     controller_hold_s: float = Field(
         default=0.5, ge=0.0, description="[s] race time a kart holds its input without a fresh one, then brakes"
     )
@@ -54,4 +56,26 @@ class Settings(BaseSettings):
     )
     switch_interval_s: float = Field(
         default=0.0005, gt=0.0, description="[s] sys.setswitchinterval: how long a busy thread may keep the GIL"
+    )
+
+    # ---- connections: idle and half-open ones time out; websocket messages are bounded (see server.routes.sockets)
+    keep_alive_timeout_s: float = Field(
+        default=5.0, gt=0.0, description="[s] an idle HTTP keep-alive connection is closed after this long"
+    )
+    ws_ping_interval_s: float = Field(
+        default=20.0, gt=0.0, description="[s] the server pings every websocket this often"
+    )
+    ws_ping_timeout_s: float = Field(
+        default=20.0, gt=0.0, description="[s] a websocket whose ping is not answered this long is closed"
+    )
+    ws_max_message_bytes: int = Field(
+        default=1 << 20,
+        ge=1024,
+        description="[bytes] the largest websocket message any socket accepts (each socket has a smaller limit)",
+    )
+    # ---- races that nobody finishes
+    absent_human_s: float = Field(
+        default=5.0,
+        ge=0.0,
+        description="[s] once every AI kart is done, a race ends when its unfinished humans were absent this long",
     )
