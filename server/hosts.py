@@ -26,6 +26,7 @@ import time
 from collections.abc import Callable
 from multiprocessing.connection import Connection, wait
 
+from arena.lifeline import die_with_parent
 from controllers.base import Controller, RaceContext
 from controllers.plan import Plan
 from server.controller_params import build_controller
@@ -88,6 +89,7 @@ def _host_main(conn: Connection) -> None:
 
 
 def _host_entry(conn: Connection) -> None:
+    die_with_parent()  # no orphan after a server crash
     step_below_realtime()
     from controllers.registry import REGISTRY
 
