@@ -229,6 +229,7 @@ class ResultOut(BaseModel):
     duration: float = Field(description="[s] race time")
     winner: int | None = Field(description="kart index of the fastest finisher; None if nobody finished")
     karts: list[KartResultOut]
+    end_reason: str | None = Field(None, description="why the race ended (absent in results of older versions)")
 
 
 class DriveInput(BaseModel):

@@ -106,6 +106,7 @@ class RaceRecord:
     duration: float  # [s] race time
     winner: int | None  # kart index of the fastest finisher; None if nobody finished
     karts: tuple[KartRecord, ...]
+    end_reason: str | None = None  # why the race ended (None: stored by a version that did not say)
 
     def to_json(self) -> dict[str, Any]:
         """The JSON form stored with the race (and shown by the API)."""
@@ -117,6 +118,7 @@ class RaceRecord:
             "duration": self.duration,
             "winner": self.winner,
             "karts": [kart.to_json() for kart in self.karts],
+            "end_reason": self.end_reason,
         }
 
     @classmethod
@@ -130,6 +132,7 @@ class RaceRecord:
             float(data["duration"]),
             data.get("winner"),
             tuple(KartRecord.from_json(kart) for kart in data["karts"]),
+            data.get("end_reason"),
         )
 
     def kart(self, index: int) -> KartRecord | None:
@@ -145,11 +148,12 @@ def race_record(
     result: RaceResult,
     karts: Sequence[KartEntry],
     faults: Sequence[DriverFaults],
+    end_reason: str | None = None,
 ) -> RaceRecord:
-    """The record of a race that ended with ``status``: the referee's ``result`` with each kart's identity and
-    faults (both indexed by kart)."""
+    """The record of a race that ended with ``status`` (for ``end_reason``): the referee's ``result`` with each
+    kart's identity and faults (both indexed by kart)."""
     records = tuple(
         KartRecord(r.kart, karts[r.kart].name, karts[r.kart].controller, result.winner == r.kart, r, faults[r.kart])
         for r in result.karts
     )
-    return RaceRecord(race_id, status, track, laps, result.duration, result.winner, records)
+    return RaceRecord(race_id, status, track, laps, result.duration, result.winner, records, end_reason)

@@ -72,6 +72,8 @@ class RaceSession:
         self.replay = ReplayRecorder(config.track.name, len(self.drivers))
         self.plans_version = 0
         self.error: str | None = None
+        self.end_reason: str | None = None  # why the race ended (stored with the result)
+        self._stuck_since: float | None = None  # [s] monotonic: since when no unfinished kart could move
         self._workers: dict[int, KartWorker] = {}  # AI kart -> where its controller runs
         self._plans = PlanRequests(race_id, services.planners, self.settings.plan_timeout_s)
         self._actions = np.zeros((1, len(self.drivers), 2))
@@ -106,17 +108,18 @@ class RaceSession:
         """Whether the race has not ended yet."""
         return self.status.live
 
-    def stop(self, status: RaceStatus = RaceStatus.STOPPED) -> bool:
-        """End the race at the next tick with ``status`` (``stopped`` or ``aborted``); False if already over."""
+    def stop(self, status: RaceStatus = RaceStatus.STOPPED, reason: str = "stopped on request") -> bool:
+        """End the race at the next tick with ``status`` for ``reason``; False if already over."""
         if not self.live or self._stop_status is not None:
             return False
         self._stop_status = status
+        self.end_reason = reason
         self._stop.set()
         return True
 
     def close(self) -> None:
         """End the race (as ``aborted`` if live) and drop it without lingering (server shutdown)."""
-        self.stop(RaceStatus.ABORTED)
+        self.stop(RaceStatus.ABORTED, "the server shut down")
         self._close.set()
 
     async def wait_status(self, statuses: Collection[RaceStatus]) -> None:
@@ -187,7 +190,7 @@ class RaceSession:
             raise
         except Exception as exc:
             log.exception("race %s failed", self.id)
-            self.error = f"{type(exc).__name__}: {exc}"
+            self.error = self.end_reason = f"{type(exc).__name__}: {exc}"
             await self._end(RaceStatus.ABORTED)
         finally:
             self._release()
@@ -253,7 +256,12 @@ class RaceSession:
             return
         await self._set_status(RaceStatus.WAITING)
         give_up = time.monotonic() + self.settings.human_wait_s
-        while not all(d.ever_connected for d in humans) and time.monotonic() < give_up:
+        while not all(d.ever_connected for d in humans):
+            if time.monotonic() >= give_up:
+                absent = ", ".join(str(d.index) for d in humans if not d.ever_connected)
+                wait_s = self.settings.human_wait_s
+                self.stop(RaceStatus.CANCELLED, f"no driver joined kart(s) {absent} within {wait_s:g} s")
+                return
             try:
                 await asyncio.wait_for(self._stop.wait(), 0.05)
                 return
@@ -275,6 +283,24 @@ class RaceSession:
             schedule.finished(loop.time())
             if self.world.done[0] or self._stop_status is not None:
                 return
+            self._end_if_stuck()
+
+    def _end_if_stuck(self) -> None:
+        """End the race (``finished``, the rest not finished) once no unfinished kart could move for
+        ``abandoned_race_s``: each an absent or silent human, or an AI whose controller is disabled."""
+        assert self.world is not None
+        finished = self.world.istate[0, :, st.I_FINISHED]
+        stuck = [d for d in self.drivers if not finished[d.index]]
+        if not all((d.braking and (d.human or d.disabled)) for d in stuck):
+            self._stuck_since = None
+            return
+        now = time.monotonic()
+        if self._stuck_since is None:
+            self._stuck_since = now
+        elif now - self._stuck_since >= self.settings.abandoned_race_s:
+            karts = ", ".join(str(d.index) for d in stuck)
+            why = f"no unfinished kart could move for {self.settings.abandoned_race_s:g} s: kart(s) {karts} "
+            self.stop(RaceStatus.FINISHED, why + "absent, silent or disabled (not finished)")
 
     # ------------------------------------------------------------------ one tick
     def _tick(self) -> None:
@@ -371,7 +397,9 @@ class RaceSession:
             config = self.config
             faults = [d.fault_record() for d in self.drivers]
             result = self.world.result(0)
-            record = race_record(self.id, status, config.track_name, config.laps, result, config.karts, faults)
+            everyone = all(k.finished for k in result.karts)
+            reason = self.end_reason or ("every kart finished" if everyone else "the time limit")
+            record = race_record(self.id, status, config.track_name, config.laps, result, config.karts, faults, reason)
         try:
             if record is None:
                 await asyncio.to_thread(self.services.db.set_status, self.id, status)

@@ -73,9 +73,10 @@ class Settings(BaseSettings):
         ge=1024,
         description="[bytes] the largest websocket message any socket accepts (each socket has a smaller limit)",
     )
-    # ---- races that nobody finishes
-    absent_human_s: float = Field(
+    # ---- races that nobody can finish
+    abandoned_race_s: float = Field(
         default=5.0,
         ge=0.0,
-        description="[s] once every AI kart is done, a race ends when its unfinished humans were absent this long",
+        description="[s] a race ends (the rest not finished) once no unfinished kart could move for this long: "
+        "every one an absent or silent human, or an AI whose controller was disabled",
     )
