@@ -30,6 +30,7 @@ class ServerThread:
     ``options`` go to ``uvicorn.Config``."""
 
     def __init__(self, app: FastAPI, *, lifespan: Literal["on", "off"] = "on", **options: Any) -> None:
+        self.app = app
         config = uvicorn.Config(app, ws_per_message_deflate=False, log_level="warning", lifespan=lifespan, **options)
         self.server = uvicorn.Server(config)
         self.loop: asyncio.AbstractEventLoop | None = None
