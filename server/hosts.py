@@ -241,6 +241,8 @@ class ControllerHost:
             self._acts.clear()
         self._start()
         for kart in self._karts.values():
+            kart.driver.worker_restarts += 1
+            kart.driver.record_error(f"its controller host process died (restart {self.restarts})", traceback=False)
             kart.reopen()
 
     def _stop_process(self, *, kill: bool) -> None:

@@ -130,11 +130,14 @@ class DriverStatusOut(BaseModel):
     index: int
     name: str
     controller: str
-    controller_faults: int = Field(description="exceptions + hangs + missed deadlines + failed plans")
+    controller_faults: int = Field(
+        description="exceptions + hangs + missed deadlines + failed plans + worker restarts"
+    )
     exceptions: int
     hangs: int
     missed_deadlines: int
     planner_faults: int
+    worker_restarts: int = Field(0, description="the process running its controller died and was restarted")
     plans_applied: int
     disabled: bool = Field(description="its controller failed to reset or hung: the kart brakes")
     braking: bool = Field(description="braking for want of fresh input")

@@ -42,14 +42,15 @@ class DriverFaults:
     hangs: int = 0
     missed_deadlines: int = 0  # ticks that found no fresh input for an observation handed over
     planner_faults: int = 0  # plans that failed or timed out
+    worker_restarts: int = 0  # the process running its controller died and was restarted
     plans_applied: int = 0
     disabled: bool = False  # its controller failed to reset or hung: the kart braked from then on
     last_error: str | None = None
 
     @property
     def controller_faults(self) -> int:
-        """Exceptions, hangs, missed deadlines and failed plans."""
-        return self.exceptions + self.hangs + self.missed_deadlines + self.planner_faults
+        """Exceptions, hangs, missed deadlines, failed plans and worker restarts."""
+        return self.exceptions + self.hangs + self.missed_deadlines + self.planner_faults + self.worker_restarts
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> DriverFaults:
