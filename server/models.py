@@ -130,9 +130,7 @@ class DriverStatusOut(BaseModel):
     index: int
     name: str
     controller: str
-    controller_faults: int = Field(
-        description="exceptions + hangs + missed deadlines + failed plans + worker restarts"
-    )
+    controller_faults: int = Field(description="exceptions + hangs + missed deadlines + failed plans + worker restarts")
     exceptions: int
     hangs: int
     missed_deadlines: int

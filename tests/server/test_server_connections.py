@@ -75,9 +75,7 @@ def test_a_websocket_that_never_answers_pings_is_closed(live: LiveServer, race: 
 
 def test_the_3d_view_listens_on_loopback_only(live: LiveServer, race: dict[str, Any]) -> None:
     port = wait_for(lambda: live.app.state.races.scene_port(race["id"]), 30)
-    listening = [
-        c for c in psutil.Process().net_connections(kind="inet") if c.status == psutil.CONN_LISTEN and c.laddr
-    ]
+    listening = [c for c in psutil.Process().net_connections(kind="inet") if c.status == psutil.CONN_LISTEN and c.laddr]
     addresses = {c.laddr.ip for c in listening if c.laddr.port == port}
     assert addresses == {"127.0.0.1"}
     with httpx.Client() as client:  # and it answers there

@@ -5,65 +5,20 @@ finished race exactly as before, the race it was running as aborted and the tour
 
 from __future__ import annotations
 
-import os
 import signal
-import socket
-import subprocess
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import httpx
 import pytest
-from support.live_server import STARTUP_TIMEOUT_S, wait_for, wait_status
+from support.live_server import wait_for, wait_status
 from support.processes import descendants, describe, survivors_after
+from support.server_process import ServerProcess
 
-ROOT = Path(__file__).resolve().parents[2]
+SETTINGS = {"speedup": "10", "controller_hosts": "1", "tournament_workers": "2"}
 RACE = {"track": "oval", "laps": 1, "karts": [{"controller": "fixed-lqng"}, {"controller": "lane-follower"}]}
 LONG_RACE = {**RACE, "laps": 20}
 TOURNAMENT = {"agents": ["fixed-lqng", "lane-follower"], "tracks": ["oval"], "races_per_pair": 50, "laps": 1}
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        port: int = sock.getsockname()[1]
-        return port
-
-
-class ServerProcess:
-    """``karting serve`` on a free loopback port and the given database, in its own process."""
-
-    def __init__(self, db: Path) -> None:
-        self.port = free_port()
-        env = {
-            **os.environ,
-            "PYTHONPATH": str(ROOT),
-            "KARTING_SPEEDUP": "10",
-            "KARTING_CONTROLLER_HOSTS": "1",
-            "KARTING_TOURNAMENT_WORKERS": "2",
-        }
-        args = [sys.executable, "-m", "karting", "serve", "--port", str(self.port), "--db", str(db), "--no-viewer"]
-        self.process = subprocess.Popen(args, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        self.client = httpx.Client(base_url=f"http://127.0.0.1:{self.port}", timeout=30.0)
-        wait_for(self._up, STARTUP_TIMEOUT_S, 0.2)
-
-    def _up(self) -> bool:
-        assert self.process.poll() is None, "the server exited"
-        try:
-            return self.client.get("/api/tracks").status_code == 200
-        except httpx.TransportError:
-            return False
-
-    def stop(self) -> None:
-        self.client.close()
-        if self.process.poll() is None:
-            self.process.terminate()
-            try:
-                self.process.wait(30)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
 
 
 @pytest.fixture
@@ -72,7 +27,7 @@ def db(tmp_path: Path) -> Iterator[Path]:
 
 
 def test_a_killed_server_leaves_no_process_and_its_results_intact(db: Path) -> None:
-    server = ServerProcess(db)
+    server = ServerProcess(db, SETTINGS)
     try:
         client = server.client
         finished = client.post("/api/races", json=RACE).json()
@@ -95,7 +50,7 @@ def test_a_killed_server_leaves_no_process_and_its_results_intact(db: Path) -> N
     finally:
         server.stop()
 
-    again = ServerProcess(db)
+    again = ServerProcess(db, SETTINGS)
     try:
         client = again.client
         assert client.get(f"/api/races/{finished['id']}/result").json() == result
