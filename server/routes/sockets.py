@@ -163,5 +163,5 @@ async def serve_socket(
         return  # the client went away, or the socket was closed under this read
     finally:
         sender.cancel()
-        with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError):
+        with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError, OSError):
             await sender
