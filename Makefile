@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 
-.PHONY: setup browser run test lint bench tracks clean
+.PHONY: setup browser compose run test lint bench tracks clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -20,10 +20,13 @@ setup: $(STAMP)
 browser:  ## Debian's chromium for the real-browser test (Playwright cannot download browsers here)
 	bash scripts/install_browser.sh
 
+compose:  ## Debian's docker-compose for the deployment test (`docker-compose config`; no engine needed)
+	bash scripts/install_compose.sh
+
 run: setup  ## set up, then start the race server on embedded defaults (SQLite file, local workers)
 	$(BIN)/karting serve
 
-test: lint browser  ## set up, then lint, type-check and run every test
+test: lint browser compose  ## set up, then lint, type-check and run every test
 	$(BIN)/python -m pytest -q
 
 lint: setup  ## ruff (rules, complexity limits), ruff format --check, mypy on every package ([tool.mypy] files)

@@ -11,20 +11,26 @@ through (every race depends on its job only).
 
 from __future__ import annotations
 
+import logging
 import multiprocessing
 import os
 from collections.abc import Callable, Generator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import asdict, dataclass, field
 from itertools import combinations
+from multiprocessing.context import BaseContext
 from typing import Any, Literal, Protocol
 
 import numpy as np
 
+from arena.lifeline import die_with_parent
 from arena.race import FinishedRace, RaceJob, run_job
 from arena.records import RaceFigures
 from controllers.race import load_any_track
 from controllers.registry import controller_names
+
+log = logging.getLogger(__name__)
 
 Backend = Literal["process", "inline", "ray"]
 BACKENDS: tuple[Backend, ...] = ("process", "inline", "ray")
@@ -226,25 +232,63 @@ def _start_method() -> str:
     return "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
 
 
+MAX_RACE_ATTEMPTS = 3  # a race whose worker process dies is run again, up to this many runs in all
+
+
+class WorkerLostError(RuntimeError):
+    """A race's worker process died in each of its :data:`MAX_RACE_ATTEMPTS` runs."""
+
+
+def _worker_pool(context: BaseContext) -> ProcessPoolExecutor:
+    """One worker process (a pool of one: a worker that dies breaks only its own pool, and loses only its race)."""
+    return ProcessPoolExecutor(max_workers=1, mp_context=context, initializer=die_with_parent)  # type: ignore[arg-type]
+
+
 def _process_races(jobs: Sequence[RaceJob], workers: int, record: bool) -> Generator[FinishedRace, None, None]:
-    """Races from a process pool, as they finish; at most ``2 * workers`` submitted at a time (a stop leaves
-    little work behind)."""
+    """Races from ``workers`` worker processes, one race each at a time, as they finish. A worker that dies loses
+    its current race only: that race runs again in a fresh worker (at most :data:`MAX_RACE_ATTEMPTS` runs)."""
     if not jobs:
         return
     context = multiprocessing.get_context(_start_method())
     queue = list(reversed(jobs))
-    pool = ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=context)
-    running: set[Future[FinishedRace]] = set()
+    runs: dict[int, int] = {}  # job index -> runs started
+    slots = [_worker_pool(context) for _ in range(min(workers, len(jobs)))]
+    running: dict[Future[FinishedRace], tuple[int, RaceJob]] = {}  # -> (slot, job)
+
+    def lost(slot: int, job: RaceJob) -> None:
+        if runs[job.index] >= MAX_RACE_ATTEMPTS:
+            raise WorkerLostError(f"race {job.index}: its worker process died in all {runs[job.index]} runs")
+        log.warning("race %d: its worker process died; running it again", job.index)
+        slots[slot].shutdown(wait=False, cancel_futures=True)
+        slots[slot] = _worker_pool(context)
+        queue.append(job)
+
     try:
         while queue or running:
-            while queue and len(running) < 2 * workers:
-                running.add(pool.submit(run_job, queue.pop(), record))
-            finished, running = wait(running, return_when=FIRST_COMPLETED)
-            for future in sorted(finished, key=lambda f: f.result().job.index):
-                yield future.result()
+            busy = {slot for slot, _job in running.values()}
+            for slot in range(len(slots)):
+                if queue and slot not in busy:
+                    job = queue.pop()
+                    runs[job.index] = runs.get(job.index, 0) + 1
+                    try:
+                        running[slots[slot].submit(run_job, job, record)] = (slot, job)
+                    except BrokenProcessPool:  # its worker died between races
+                        lost(slot, job)
+            if not running:
+                continue
+            finished, _pending = wait(running, return_when=FIRST_COMPLETED)
+            for future in sorted(finished, key=lambda f: running[f][1].index):
+                slot, job = running.pop(future)
+                try:
+                    race = future.result()
+                except BrokenProcessPool:
+                    lost(slot, job)
+                    continue
+                yield race
     finally:
-        # stopped early: drop what has not started, do not wait for the races in flight
-        pool.shutdown(wait=not running, cancel_futures=True)
+        # stopped early: do not wait for the races in flight
+        for pool in slots:
+            pool.shutdown(wait=not running, cancel_futures=True)
 
 
 def _ray_races(jobs: Sequence[RaceJob], address: str | None, record: bool) -> Generator[FinishedRace, None, None]:

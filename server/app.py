@@ -11,6 +11,7 @@ import logging
 import sys
 from collections.abc import AsyncIterator, Callable, Mapping
 from contextlib import AbstractAsyncContextManager, asynccontextmanager
+from typing import Any
 
 from fastapi import APIRouter, FastAPI
 from fastapi.openapi.docs import get_redoc_html
@@ -221,6 +222,18 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
     return app
 
 
+def connection_options(settings: Settings) -> dict[str, Any]:
+    """uvicorn's connection limits from ``settings``: idle keep-alive connections and unanswered websocket pings
+    time out, and no websocket message over ``ws_max_message_bytes`` is assembled (each socket has a smaller
+    limit of its own, :mod:`server.routes.sockets`)."""
+    return {
+        "timeout_keep_alive": settings.keep_alive_timeout_s,
+        "ws_ping_interval": settings.ws_ping_interval_s,
+        "ws_ping_timeout": settings.ws_ping_timeout_s,
+        "ws_max_size": settings.ws_max_message_bytes,
+    }
+
+
 def serve(settings: Settings) -> None:
     """Run the server with uvicorn until interrupted: one worker (races live in this process), no websocket
     compression (viewer frames are already compressed), timers to the microsecond (:mod:`server.loop`)."""
@@ -238,4 +251,5 @@ def serve(settings: Settings) -> None:
         ws_per_message_deflate=False,
         loop="server.loop:new_precise_loop",
         log_level="info",
+        **connection_options(settings),
     )

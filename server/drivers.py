@@ -77,6 +77,7 @@ class KartDriver:
         self.missed = 0  # ticks that found no fresh input for an observation handed over
         self.hangs = 0
         self.planner_faults = 0  # plans that failed or timed out
+        self.worker_restarts = 0  # times the process running its controller died and was restarted
         self.last_error: str | None = None
         self.submitted_step = -1  # race step of the last observation handed to the thread
         # inputs
@@ -96,8 +97,8 @@ class KartDriver:
 
     @property
     def faults(self) -> int:
-        """Exceptions, hangs, missed deadlines and failed plans of this kart's controller."""
-        return self.exceptions + self.hangs + self.missed + self.planner_faults
+        """Exceptions, hangs, missed deadlines, failed plans and worker restarts of this kart's controller."""
+        return self.exceptions + self.hangs + self.missed + self.planner_faults + self.worker_restarts
 
     @property
     def plans_applied(self) -> int:
@@ -111,6 +112,7 @@ class KartDriver:
             hangs=self.hangs,
             missed_deadlines=self.missed,
             planner_faults=self.planner_faults,
+            worker_restarts=self.worker_restarts,
             plans_applied=self.plans_applied,
             disabled=self.disabled,
             last_error=self.last_error,

@@ -26,6 +26,7 @@ import time
 from collections.abc import Callable
 from multiprocessing.connection import Connection, wait
 
+from arena.lifeline import die_with_parent
 from controllers.base import Controller, RaceContext
 from controllers.plan import Plan
 from server.controller_params import build_controller
@@ -88,6 +89,7 @@ def _host_main(conn: Connection) -> None:
 
 
 def _host_entry(conn: Connection) -> None:
+    die_with_parent()  # no orphan after a server crash
     step_below_realtime()
     from controllers.registry import REGISTRY
 
@@ -239,6 +241,8 @@ class ControllerHost:
             self._acts.clear()
         self._start()
         for kart in self._karts.values():
+            kart.driver.worker_restarts += 1
+            kart.driver.record_error(f"its controller host process died (restart {self.restarts})", traceback=False)
             kart.reopen()
 
     def _stop_process(self, *, kill: bool) -> None:

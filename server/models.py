@@ -32,7 +32,7 @@ from sim_core.world import KartResult
 from web.frame import KartFrame
 
 CONTROLLER_FAULTS_DOC = (
-    "what the kart's controller got wrong: exceptions + hangs + missed deadlines + failed plans "
+    "what the kart's controller got wrong: exceptions + hangs + missed deadlines + failed plans + worker restarts "
     "(not collisions: those are collisions_at_fault)"
 )
 INDEX_DOC = "the kart's grid slot from 0 (pages and the command line show kart numbers from 1: index + 1)"
@@ -196,6 +196,7 @@ class DriverStatusOut(BaseModel):
     hangs: int
     missed_deadlines: int
     planner_faults: int
+    worker_restarts: int = Field(0, description="the process running its controller died and was restarted")
     plans_applied: int
     disabled: bool = Field(description="its controller failed to reset or hung: the kart brakes")
     braking: bool = Field(description="braking for want of fresh input")
@@ -306,6 +307,7 @@ class ResultOut(BaseModel):
     duration: float = Field(description="[s] race time (times are rounded to the millisecond)")
     winner: int | None = Field(description="index of the fastest finisher's kart; None if nobody finished")
     karts: list[KartResultOut]
+    end_reason: str | None = Field(None, description="why the race ended (absent in results of older versions)")
 
 
 class DriveInput(BaseModel):
@@ -315,7 +317,9 @@ class DriveInput(BaseModel):
 
     steer: float = Field(ge=-1.0, le=1.0, allow_inf_nan=False, description="positive = left")
     throttle: float = Field(ge=-1.0, le=1.0, allow_inf_nan=False, description="negative brakes")
-    seq: int | None = Field(None, description="echoed back as input_seq in the state after it is applied")
+    seq: int | None = Field(
+        None, ge=0, le=2**53, description="echoed back as input_seq in the state after it is applied"
+    )
 
 
 class DriveReady(BaseModel):
@@ -333,6 +337,7 @@ CLOSE_FORBIDDEN = 4403
 CLOSE_NOT_FOUND = 4404
 CLOSE_TAKEN = 4409
 CLOSE_OVER = 4410
+CLOSE_TOO_BIG = 1009  # RFC 6455 "message too big": over the socket's limit (server.routes.sockets)
 
 
 class StateMessage(BaseModel):

@@ -20,6 +20,7 @@ from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
+from arena.lifeline import die_with_parent
 from controllers.base import HighLevelPlanner, PlanningDriver
 from controllers.plan import Plan
 from server.controller_params import build_controller
@@ -79,6 +80,12 @@ def _worker_handle(message: ToPlanner) -> float | Plan | None:
             return warm_planner()
 
 
+def _start_worker() -> None:
+    """A worker's first act: die with the server (no orphan after a crash), at ordinary scheduling priority."""
+    die_with_parent()
+    make_ordinary()
+
+
 # ----------------------------------------------------------------------------------------- server side
 class _Worker:
     """One single-process executor and the keys whose planners it holds."""
@@ -86,7 +93,7 @@ class _Worker:
     def __init__(self, slot: int) -> None:
         self.slot = slot
         self.executor = ProcessPoolExecutor(
-            1, mp_context=multiprocessing.get_context("spawn"), initializer=make_ordinary
+            1, mp_context=multiprocessing.get_context("spawn"), initializer=_start_worker
         )
         self.opened: set[str] = set()  # keys built in the current process
         self.keys: set[str] = set()  # keys routed here

@@ -53,14 +53,15 @@ class DriverFaults:
     hangs: int = 0
     missed_deadlines: int = 0  # ticks that found no fresh input for an observation handed over
     planner_faults: int = 0  # plans that failed or timed out
+    worker_restarts: int = 0  # the process running its controller died and was restarted
     plans_applied: int = 0
     disabled: bool = False  # its controller failed to reset or hung: the kart braked from then on
     last_error: str | None = None
 
     @property
     def controller_faults(self) -> int:
-        """Exceptions, hangs, missed deadlines and failed plans."""
-        return self.exceptions + self.hangs + self.missed_deadlines + self.planner_faults
+        """Exceptions, hangs, missed deadlines, failed plans and worker restarts."""
+        return self.exceptions + self.hangs + self.missed_deadlines + self.planner_faults + self.worker_restarts
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> DriverFaults:
@@ -123,6 +124,7 @@ class RaceRecord:
     seed: int | None = None  # None: stored by a version that did not record it
     kart_preset: str | None = None
     start_lanes: tuple[int, ...] | None = None  # the lanes the karts started in (the defaults when none were asked)
+    end_reason: str | None = None  # why the race ended (None: stored by a version that did not say)
 
     def to_json(self) -> dict[str, Any]:
         """The JSON form stored with the race (and shown by the API)."""
@@ -137,6 +139,7 @@ class RaceRecord:
             "duration": round(self.duration, TIME_DIGITS),
             "winner": self.winner,
             "karts": [kart.to_json() for kart in self.karts],
+            "end_reason": self.end_reason,
         }
 
     @classmethod
@@ -153,6 +156,7 @@ class RaceRecord:
             data.get("seed"),
             data.get("kart_preset"),
             tuple(data["start_lanes"]) if data.get("start_lanes") is not None else None,
+            data.get("end_reason"),
         )
 
     def kart(self, index: int) -> KartRecord | None:
@@ -170,9 +174,10 @@ def race_record(
     faults: Sequence[DriverFaults],
     setup: RaceSetup | None = None,
     lap_times: Sequence[Sequence[float]] = (),
+    end_reason: str | None = None,
 ) -> RaceRecord:
-    """The record of a race that ended with ``status``: the referee's ``result`` with each kart's identity,
-    faults and lap times (indexed by kart), and what the race was started with (``setup``)."""
+    """The record of a race that ended with ``status`` (for ``end_reason``): the referee's ``result`` with each
+    kart's identity, faults and lap times (indexed by kart), and what the race was started with (``setup``)."""
     records = tuple(
         KartRecord(
             r.kart,
@@ -186,7 +191,9 @@ def race_record(
         for r in result.karts
     )
     seed, preset, lanes = (setup.seed, setup.kart_preset, setup.start_lanes) if setup is not None else (None,) * 3
-    return RaceRecord(race_id, status, track, laps, result.duration, result.winner, records, seed, preset, lanes)
+    return RaceRecord(
+        race_id, status, track, laps, result.duration, result.winner, records, seed, preset, lanes, end_reason
+    )
 
 
 @dataclass(frozen=True)

@@ -76,6 +76,8 @@ class RaceSession:
         self.laps = LapTimer(len(self.drivers), config.track.n_checkpoints)
         self.plans_version = 0
         self.error: str | None = None
+        self.end_reason: str | None = None  # why the race ended (stored with the result)
+        self._stuck_since: float | None = None  # [s] monotonic: since when no unfinished kart could move
         self._workers: dict[int, KartWorker] = {}  # AI kart -> where its controller runs
         self._plans = PlanRequests(race_id, services.planners, self.settings.plan_timeout_s)
         self._actions = np.zeros((1, len(self.drivers), 2))
@@ -112,17 +114,18 @@ class RaceSession:
         """Whether the race has not ended yet."""
         return self.status.live
 
-    def stop(self, status: RaceStatus = RaceStatus.STOPPED) -> bool:
-        """End the race at the next tick with ``status`` (``stopped`` or ``aborted``); False if already over."""
+    def stop(self, status: RaceStatus = RaceStatus.STOPPED, reason: str = "stopped on request") -> bool:
+        """End the race at the next tick with ``status`` for ``reason``; False if already over."""
         if not self.live or self._stop_status is not None:
             return False
         self._stop_status = status
+        self.end_reason = reason
         self._stop.set()
         return True
 
     def close(self) -> None:
         """End the race (as ``aborted`` if live) and drop it without lingering (server shutdown)."""
-        self.stop(RaceStatus.ABORTED)
+        self.stop(RaceStatus.ABORTED, "the server shut down")
         self._close.set()
 
     async def wait_status(self, statuses: Collection[RaceStatus]) -> None:
@@ -202,7 +205,7 @@ class RaceSession:
             raise
         except Exception as exc:
             log.exception("race %s failed", self.id)
-            self.error = f"{type(exc).__name__}: {exc}"
+            self.error = self.end_reason = f"{type(exc).__name__}: {exc}"
             await self._end(RaceStatus.ABORTED)
         finally:
             self._release()
@@ -264,16 +267,24 @@ class RaceSession:
 
     async def _wait_for_humans(self) -> None:
         """Wait until every human driver has connected and its view is ready: at most ``human_wait_s`` for the
-        connections, then at most ``view_ready_wait_s`` for the views; then the race starts anyway."""
+        connections (a driver who never comes cancels the race), then at most ``view_ready_wait_s`` for the views
+        (then the race starts anyway)."""
         await self._set_status(RaceStatus.WAITING)
         now = time.monotonic()
         joined_by = now + self.settings.human_wait_s
         ready_by: float | None = None
         while self.waiting_for():
             now = time.monotonic()
-            if ready_by is None and all(d.ever_connected for d in self.drivers if d.human):
+            humans = [d for d in self.drivers if d.human]
+            if ready_by is None and all(d.ever_connected for d in humans):
                 ready_by = now + self.settings.view_ready_wait_s
-            if now >= (ready_by if ready_by is not None else joined_by):
+            if ready_by is None and now >= joined_by:
+                # a driver who never came: the race is called off (it would run with a parked kart)
+                absent = ", ".join(str(d.index) for d in humans if not d.ever_connected)
+                wait_s = self.settings.human_wait_s
+                self.stop(RaceStatus.CANCELLED, f"no driver joined kart(s) {absent} within {wait_s:g} s")
+                return
+            if ready_by is not None and now >= ready_by:
                 late = ", ".join(d.name for d in self.waiting_for())
                 log.info("race %s: starting without waiting longer for %s", self.id, late)
                 return
@@ -319,6 +330,24 @@ class RaceSession:
             schedule.finished(loop.time())
             if self.world.done[0] or self._stop_status is not None:
                 return
+            self._end_if_stuck()
+
+    def _end_if_stuck(self) -> None:
+        """End the race (``finished``, the rest not finished) once no unfinished kart could move for
+        ``abandoned_race_s``: each an absent or silent human, or an AI whose controller is disabled."""
+        assert self.world is not None
+        finished = self.world.istate[0, :, st.I_FINISHED]
+        stuck = [d for d in self.drivers if not finished[d.index]]
+        if not all((d.braking and (d.human or d.disabled)) for d in stuck):
+            self._stuck_since = None
+            return
+        now = time.monotonic()
+        if self._stuck_since is None:
+            self._stuck_since = now
+        elif now - self._stuck_since >= self.settings.abandoned_race_s:
+            karts = ", ".join(str(d.index) for d in stuck)
+            why = f"no unfinished kart could move for {self.settings.abandoned_race_s:g} s: kart(s) {karts} "
+            self.stop(RaceStatus.FINISHED, why + "absent, silent or disabled (not finished)")
 
     # ------------------------------------------------------------------ one tick
     def _tick(self) -> None:
@@ -429,6 +458,8 @@ class RaceSession:
             result = self.world.result(0)
             lanes = grid_lanes(len(config.karts), config.start_lanes)
             setup = RaceSetup(config.seed, config.kart_preset, lanes)
+            everyone = all(k.finished for k in result.karts)
+            reason = self.end_reason or ("every kart finished" if everyone else "the time limit")
             record = race_record(
                 self.id,
                 status,
@@ -439,6 +470,7 @@ class RaceSession:
                 faults,
                 setup,
                 self.laps.all_lap_times(),
+                reason,
             )
         try:
             if record is None:

@@ -40,7 +40,9 @@ class Settings(BaseSettings):
     drive_timeout_s: float = Field(
         default=0.5, gt=0.0, description="[s] wall time without driver input before the kart brakes"
     )
-    human_wait_s: float = Field(default=120.0, ge=0.0, description="[s] a race waits this long for its human drivers")
+    human_wait_s: float = Field(
+        default=60.0, ge=0.0, description="[s] a race waits this long for its human drivers, then is cancelled"
+    )
     view_ready_wait_s: float = Field(
         default=30.0,
         ge=0.0,
@@ -77,6 +79,28 @@ class Settings(BaseSettings):
         default=0.0005, gt=0.0, description="[s] sys.setswitchinterval: how long a busy thread may keep the GIL"
     )
 
+    # ---- connections: idle and half-open ones time out; websocket messages are bounded (see server.routes.sockets)
+    keep_alive_timeout_s: float = Field(
+        default=5.0, gt=0.0, description="[s] an idle HTTP keep-alive connection is closed after this long"
+    )
+    ws_ping_interval_s: float = Field(
+        default=20.0, gt=0.0, description="[s] the server pings every websocket this often"
+    )
+    ws_ping_timeout_s: float = Field(
+        default=20.0, gt=0.0, description="[s] a websocket whose ping is not answered this long is closed"
+    )
+    ws_max_message_bytes: int = Field(
+        default=1 << 20,
+        ge=1024,
+        description="[bytes] the largest websocket message any socket accepts (each socket has a smaller limit)",
+    )
+    # ---- races that nobody can finish
+    abandoned_race_s: float = Field(
+        default=5.0,
+        ge=0.0,
+        description="[s] a race ends (the rest not finished) once no unfinished kart could move for this long: "
+        "every one an absent or silent human, or an AI whose controller was disabled",
+    )
     # ---------------------------------------------------------------- the edge: exposed deployments (server.edge)
     max_body_bytes: int = Field(
         default=64 * 1024, ge=1024, description="[bytes] larger request bodies are refused with 413 before parsing"

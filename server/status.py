@@ -15,6 +15,7 @@ class RaceStatus(StrEnum):
     FINISHED = "finished"  # the referee's rules: everyone finished or the time limit
     STOPPED = "stopped"  # on request
     ABORTED = "aborted"  # server shutdown, a crash, or a server that died under it
+    CANCELLED = "cancelled"  # a human kart's driver never came: the race did not start
 
     @property
     def live(self) -> bool:

@@ -96,6 +96,7 @@ def driver_view(driver: DriverState) -> DriverStatusOut:
         hangs=faults.hangs,
         missed_deadlines=faults.missed_deadlines,
         planner_faults=faults.planner_faults,
+        worker_restarts=faults.worker_restarts,
         plans_applied=faults.plans_applied,
         disabled=faults.disabled,
         braking=driver.braking,

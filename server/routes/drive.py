@@ -13,22 +13,23 @@ to the kart (:mod:`server.drive_events`: the start, wall hits, collisions at fau
 the wrong way, passes, laps, the finish). A bad message gets an :class:`~server.models.ErrorMessage` ``{"type":
 "error", "error": ...}`` and the connection stays. Silence for ``drive_timeout_s`` brakes the kart. When the race
 ends: an :class:`~server.models.EndMessage` ``{"type": "end", "status", "result"}`` and a normal close. Refusals
-close with a code and reason: 4400 bad ``kart`` or ``view`` / not a human kart, 4403 wrong token, 4404 no such
-race, 4409 the kart already has a driver, 4410 the race is over.
+close with a code and reason: 4400 bad ``kart`` or ``view`` / not a human kart, or any other malformed parameter
+(:mod:`server.routes.sockets`), 4403 wrong token, 4404 no such race, 4409 the kart already has a driver, 4410 the
+race is over; a message over 4 KiB closes with 1009.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import secrets
 
-from fastapi import APIRouter, WebSocket, WebSocketDisconnect
+from fastapi import APIRouter, WebSocket
 from pydantic import ValidationError
 
 from server.deps import Races
 from server.drive_events import DriveEvents
 from server.drivers import KartDriver
+from server.live import LiveRaces
 from server.models import (
     CLOSE_BAD_REQUEST,
     CLOSE_FORBIDDEN,
@@ -42,31 +43,17 @@ from server.models import (
     EventMessage,
     StateMessage,
 )
+from server.routes.sockets import DriveParams, RefusedError, SocketWriter, describe, refuse, serve_socket, socket_params
 from server.session import RaceSession
 from server.views import result_view
 
-MAX_MESSAGE_CHARS = 1000  # drive messages are tiny; anything longer is refused
+MAX_MESSAGE_BYTES = 4096  # [bytes] a drive message is about 60; a longer one closes the socket with 1009
 
 router = APIRouter()
 
 
-async def refuse(websocket: WebSocket, code: int, reason: str) -> None:
-    """Close an accepted websocket with ``code`` and ``reason``."""
-    await websocket.close(code=code, reason=reason)
-
-
-def _describe(exc: ValidationError) -> str:
-    parts = []
-    for error in exc.errors():
-        where = ".".join(str(p) for p in error["loc"]) or "message"
-        parts.append(f"{where}: {error['msg']}")
-    return "; ".join(parts)
-
-
 def _parse(text: str) -> DriveInput | DriveReady | str:
     """The input or the ready message in ``text``, or what is wrong with it."""
-    if len(text) > MAX_MESSAGE_CHARS:
-        return f"message too long ({len(text)} characters, at most {MAX_MESSAGE_CHARS})"
     try:
         return DriveInput.model_validate_json(text)
     except ValidationError as exc:
@@ -76,94 +63,85 @@ def _parse(text: str) -> DriveInput | DriveReady | str:
             return DriveReady.model_validate_json(text)
         except ValidationError as exc:
             error = exc
-    return _describe(error)
+    return describe(error)
+
+
+async def _claim(websocket: WebSocket, race_id: str, races: LiveRaces) -> tuple[RaceSession, KartDriver, DriveParams]:
+    """The race and the kart this connection may drive, and its parameters; raises :class:`RefusedError` with why
+    not."""
+    params = socket_params(DriveParams, websocket, {"race_id": race_id})
+    session = races.get(params.race_id)
+    if session is None:
+        stored = await asyncio.to_thread(races.services.db.get, params.race_id)
+        if stored is None:
+            raise RefusedError(CLOSE_NOT_FOUND, f"no race {params.race_id}")
+        raise RefusedError(CLOSE_OVER, f"race is over ({stored.status.value})")
+    if params.kart >= len(session.drivers):
+        raise RefusedError(CLOSE_BAD_REQUEST, f"kart must be 0..{len(session.drivers) - 1}")
+    driver = session.drivers[params.kart]
+    if not driver.human or driver.token is None:
+        raise RefusedError(CLOSE_BAD_REQUEST, f"kart {driver.index} is not a human kart")
+    if not secrets.compare_digest(params.token.encode(), driver.token.encode()):
+        raise RefusedError(CLOSE_FORBIDDEN, "wrong token")
+    if not session.live:
+        raise RefusedError(CLOSE_OVER, f"race is over ({session.status.value})")
+    if driver.connected:
+        raise RefusedError(CLOSE_TAKEN, f"kart {driver.index} already has a driver")
+    return session, driver, params
 
 
 @router.websocket("/races/{race_id}/drive")
 async def drive(websocket: WebSocket, race_id: str, races: Races) -> None:
     """Drive a human kart (protocol in the module docstring)."""
     await websocket.accept()
-    kart_param = websocket.query_params.get("kart")
-    token = websocket.query_params.get("token", "")
-    view = websocket.query_params.get("view", "0")
-    session = races.get(race_id)
-    if session is None:
-        stored = await asyncio.to_thread(races.services.db.get, race_id)
-        if stored is None:
-            return await refuse(websocket, CLOSE_NOT_FOUND, f"no race {race_id}")
-        return await refuse(websocket, CLOSE_OVER, f"race is over ({stored.status.value})")
-    if kart_param is None or not kart_param.isdigit() or int(kart_param) >= len(session.drivers):
-        return await refuse(websocket, CLOSE_BAD_REQUEST, f"kart must be 0..{len(session.drivers) - 1}")
-    if view not in ("0", "1"):
-        return await refuse(websocket, CLOSE_BAD_REQUEST, "view must be 0 or 1")
-    driver = session.drivers[int(kart_param)]
-    if not driver.human or driver.token is None:
-        return await refuse(websocket, CLOSE_BAD_REQUEST, f"kart {driver.index} is not a human kart")
-    if not secrets.compare_digest(token.encode(), driver.token.encode()):
-        return await refuse(websocket, CLOSE_FORBIDDEN, "wrong token")
-    if not session.live:
-        return await refuse(websocket, CLOSE_OVER, f"race is over ({session.status.value})")
-    if driver.connected:
-        return await refuse(websocket, CLOSE_TAKEN, f"kart {driver.index} already has a driver")
+    try:
+        session, driver, params = await _claim(websocket, race_id, races)
+    except RefusedError as refusal:
+        return await refuse(websocket, refusal.code, refusal.reason)
     driver.connected = True
     driver.ever_connected = True
-    driver.view_ready = view == "0"
-    lock = asyncio.Lock()  # the state sender and the error replies share the socket
-    sender = asyncio.get_running_loop().create_task(_send_states(websocket, session, driver, lock))
+    driver.view_ready = params.view == 0
+    writer = SocketWriter(websocket)
+
+    async def on_message(text: str) -> None:
+        parsed = _parse(text)
+        if isinstance(parsed, str):
+            await writer.send_text(ErrorMessage(error=parsed).model_dump_json())
+        elif isinstance(parsed, DriveReady):
+            driver.view_ready = True
+        else:
+            session.drive_input(driver.index, parsed.steer, parsed.throttle, parsed.seq)
+
     try:
-        while True:
-            message = await websocket.receive()
-            if message["type"] == "websocket.disconnect":
-                break
-            text = message.get("text")
-            if text is None:
-                text = (message.get("bytes") or b"").decode("utf-8", errors="replace")
-            parsed = _parse(text)
-            if isinstance(parsed, str):
-                async with lock:
-                    await websocket.send_text(ErrorMessage(error=parsed).model_dump_json())
-                continue
-            if isinstance(parsed, DriveReady):
-                driver.view_ready = True
-            else:
-                session.drive_input(driver.index, parsed.steer, parsed.throttle, parsed.seq)
-    except (WebSocketDisconnect, RuntimeError):
-        pass  # the sender closed the socket at the end of the race, or the client went away
+        sending = _send_states(writer, session, driver)
+        await serve_socket(writer, sending, max_message_bytes=MAX_MESSAGE_BYTES, on_message=on_message)
     finally:
         driver.connected = False
-        sender.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await sender
 
 
-async def _send_states(websocket: WebSocket, session: RaceSession, driver: KartDriver, lock: asyncio.Lock) -> None:
+async def _send_states(writer: SocketWriter, session: RaceSession, driver: KartDriver) -> None:
     events = DriveEvents(session.config.track, driver.index)
     seen = -1
-    try:
-        while True:
-            seen = await session.updates.wait(seen)
-            frame = session.frame
-            if frame is not None:
-                state = StateMessage(
-                    step=frame.step,
-                    time=frame.time,
-                    status=frame.status,
-                    input_seq=driver.applied_seq,
-                    braking=driver.braking,
-                    kart=frame.karts[driver.index],
-                    countdown=frame.countdown,
-                    waiting_for=[d.name for d in session.waiting_for()],
-                )
-                happened = [EventMessage(kind=e.kind, text=e.text, time=e.time) for e in events.update(frame)]
-                async with lock:
-                    await websocket.send_text(state.model_dump_json())
-                    for event in happened:
-                        await websocket.send_text(event.model_dump_json())
-            if not session.live:
-                result = result_view(session.result) if session.result is not None else None
-                async with lock:
-                    await websocket.send_text(EndMessage(status=session.status, result=result).model_dump_json())
-                    await websocket.close(code=1000, reason=f"race {session.status.value}")
-                return
-    except (WebSocketDisconnect, RuntimeError):
-        return
+    while True:
+        seen = await session.updates.wait(seen)
+        frame = session.frame
+        if frame is not None:
+            state = StateMessage(
+                step=frame.step,
+                time=frame.time,
+                status=frame.status,
+                input_seq=driver.applied_seq,
+                braking=driver.braking,
+                kart=frame.karts[driver.index],
+                countdown=frame.countdown,
+                waiting_for=[d.name for d in session.waiting_for()],
+            )
+            happened = [EventMessage(kind=e.kind, text=e.text, time=e.time) for e in events.update(frame)]
+            await writer.send_text(state.model_dump_json())
+            for event in happened:
+                await writer.send_text(event.model_dump_json())
+        if not session.live:
+            result = result_view(session.result) if session.result is not None else None
+            await writer.send_text(EndMessage(status=session.status, result=result).model_dump_json())
+            await writer.close(1000, f"race {session.status.value}")
+            return

@@ -73,8 +73,23 @@ class BadReset(Raiser):
         raise RuntimeError("no track for me")
 
 
+class NotANumber(Raiser):
+    """Answers NaN steering (and infinite throttle) after 20 good decisions."""
+
+    name = "nan"
+
+    def __init__(self) -> None:
+        self.calls = 0
+
+    def act(self, observation: Observation) -> Action:
+        """Drives, then answers what no kart can take."""
+        self.calls += 1
+        return Action(0.0, 1.0) if self.calls <= 20 else Action(float("nan"), float("inf"))
+
+
 FAULTY = {
-    cls.name: ControllerSpec(cls.name, f"test-only: {cls.__doc__}", cls) for cls in (Raiser, Hanger, Sluggard, BadReset)
+    cls.name: ControllerSpec(cls.name, f"test-only: {cls.__doc__}", cls)
+    for cls in (Raiser, Hanger, Sluggard, BadReset, NotANumber)
 }
 
 
@@ -97,9 +112,10 @@ def client(live: LiveServer) -> Iterator[httpx.Client]:
 
 @pytest.fixture(scope="module")
 def faulty_race(client: httpx.Client) -> Iterator[dict[str, Any]]:
-    """One race: the lane follower (kart 0) against the raiser, the hanger, the sluggard and the bad reset
-    (karts 1-4), followed until the hanger was given up and the lane follower passed three checkpoints."""
-    karts = [{"controller": name} for name in ("lane-follower", "raiser", "hanger", "sluggard", "bad-reset")]
+    """One race: the lane follower (kart 0) against the raiser, the hanger, the sluggard, the bad reset and the
+    NaN answerer (karts 1-5), followed until the hanger was given up and the lane follower passed three checkpoints."""
+    names = ("lane-follower", "raiser", "hanger", "sluggard", "bad-reset", "nan")
+    karts = [{"controller": name} for name in names]
     race = start_race(client, track="oval", laps=3, karts=karts)
     wait_status(client, race["id"], ("running",), 30)
 
@@ -134,7 +150,7 @@ def test_the_healthy_kart_drives_on(faulty_race: dict[str, Any]) -> None:
     follower = detail["drivers"][0]
     assert follower["exceptions"] == 0 and follower["controller_faults"] <= 5 and not follower["braking"]
     passed = {s["index"]: s["checkpoints_passed"] for s in detail["standings"]}
-    assert passed[0] >= 3 and all(passed[k] <= 0 for k in (1, 2, 3, 4))
+    assert passed[0] >= 3 and all(passed[k] <= 0 for k in (1, 2, 3, 4, 5))
 
 
 def test_a_raising_controller_brakes_its_kart_and_is_counted(faulty_race: dict[str, Any]) -> None:
@@ -164,9 +180,16 @@ def test_a_controller_whose_reset_fails_brakes_from_the_start(faulty_race: dict[
     )
 
 
+def test_a_controller_answering_nan_is_counted_and_its_kart_brakes(faulty_race: dict[str, Any]) -> None:
+    nan = faulty_race["detail"]["drivers"][5]
+    assert nan["exceptions"] > 20 and "non-finite action (nan, inf)" in nan["last_error"]
+    assert nan["braking"] and not nan["disabled"]
+
+
 def test_faults_are_in_the_result(client: httpx.Client, faulty_race: dict[str, Any]) -> None:
     race_id = faulty_race["race"]["id"]
     client.post(f"/api/races/{race_id}/stop")
     karts = client.get(f"/api/races/{race_id}/result").json()["karts"]
     assert karts[1]["controller_faults"] > 20 and "ZeroDivisionError" in karts[1]["last_error"]
     assert karts[2]["controller_faults"] >= 1 and karts[4]["controller_faults"] == 1
+    assert karts[5]["exceptions"] > 20 and "non-finite action" in karts[5]["last_error"]

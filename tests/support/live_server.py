@@ -26,10 +26,12 @@ STARTUP_TIMEOUT_S = 90.0  # the planner worker's first start imports and warms n
 
 
 class ServerThread:
-    """``app`` served by uvicorn in a daemon thread (a context manager). ``lifespan="off"`` for bare routers."""
+    """``app`` served by uvicorn in a daemon thread (a context manager). ``lifespan="off"`` for bare routers;
+    ``options`` go to ``uvicorn.Config``."""
 
-    def __init__(self, app: FastAPI, *, lifespan: Literal["on", "off"] = "on") -> None:
-        config = uvicorn.Config(app, ws_per_message_deflate=False, log_level="warning", lifespan=lifespan)
+    def __init__(self, app: FastAPI, *, lifespan: Literal["on", "off"] = "on", **options: Any) -> None:
+        self.app = app
+        config = uvicorn.Config(app, ws_per_message_deflate=False, log_level="warning", lifespan=lifespan, **options)
         self.server = uvicorn.Server(config)
         self.loop: asyncio.AbstractEventLoop | None = None
         self.port = 0
@@ -86,13 +88,14 @@ class ServerThread:
 
 
 class LiveServer(ServerThread):
-    """The race server, ``create_app(settings, controllers=controllers)``, with its lifespan."""
+    """The race server, ``create_app(settings, controllers=controllers)``, with its lifespan and the connection
+    limits ``karting serve`` uses (:func:`server.app.connection_options`)."""
 
     def __init__(self, settings: Settings, controllers: Mapping[str, ControllerSpec] | None = None) -> None:
-        from server.app import create_app
+        from server.app import connection_options, create_app
 
         self.settings = settings
-        super().__init__(create_app(settings, controllers=controllers))
+        super().__init__(create_app(settings, controllers=controllers), **connection_options(settings))
 
 
 def server_settings(db_path: Path, **overrides: Any) -> Settings:
