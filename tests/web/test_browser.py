@@ -16,7 +16,6 @@ Skipped only when no chromium binary is installed (``scripts/install_browser.sh`
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -24,6 +23,7 @@ from typing import TYPE_CHECKING
 
 import httpx
 import pytest
+from support.browser import CHROMIUM_ARGS, chromium_binary
 from support.live_server import LiveServer, ServerThread, server_settings, wait_for
 
 if TYPE_CHECKING:
@@ -32,21 +32,6 @@ if TYPE_CHECKING:
 ROOT = Path(__file__).resolve().parents[2]
 ARTIFACTS = ROOT / "test-artifacts"
 SCREENSHOTS = ROOT / "docs" / "screenshots"  # the README's pictures, refreshed by every run of these tests
-CHROMIUM_CANDIDATES = (
-    os.environ.get("KARTING_CHROMIUM", ""),
-    "/usr/bin/chromium",
-    "/usr/lib/chromium/chromium",
-    "/usr/bin/chromium-headless-shell",
-    "/usr/lib/chromium/chromium-headless-shell",
-)
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 
 
 def readme_screenshot(page: Page, name: str, *, full_page: bool = False) -> None:
@@ -55,11 +40,6 @@ def readme_screenshot(page: Page, name: str, *, full_page: bool = False) -> None
     SCREENSHOTS.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=str(ARTIFACTS / name), full_page=full_page)
     (SCREENSHOTS / name).write_bytes((ARTIFACTS / name).read_bytes())
-
-
-def chromium_binary() -> str | None:
-    """The first installed chromium binary, if any."""
-    return next((path for path in CHROMIUM_CANDIDATES if path and os.access(path, os.X_OK)), None)
 
 
 pytestmark = pytest.mark.skipif(

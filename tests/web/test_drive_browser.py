@@ -13,7 +13,6 @@ when no chromium binary is installed.
 from __future__ import annotations
 
 import json
-import os
 import re
 import threading
 from collections.abc import Iterator
@@ -22,20 +21,13 @@ from typing import Any
 
 import httpx
 import pytest
+from support.browser import CHROMIUM_ARGS, chromium_binary
 from support.live_server import LiveServer, server_settings, start_race, wait_for
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 ROOT = Path(__file__).resolve().parents[2]
 ARTIFACTS = ROOT / "test-artifacts"
-CHROMIUM_CANDIDATES = (
-    os.environ.get("KARTING_CHROMIUM", ""),
-    "/usr/bin/chromium",
-    "/usr/lib/chromium/chromium",
-    "/usr/bin/chromium-headless-shell",
-    "/usr/lib/chromium/chromium-headless-shell",
-)
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-sync"]
 RACE = {
     "track": "oval",
     "laps": 1,
@@ -43,11 +35,6 @@ RACE = {
     "karts": [{"controller": "human", "name": "Ada"}, {"controller": "lane-follower", "name": "Bot"}],
 }
 BEFORE_THE_START = ("starting", "waiting", "countdown")
-
-
-def chromium_binary() -> str | None:
-    """The first installed chromium binary, if any."""
-    return next((path for path in CHROMIUM_CANDIDATES if path and os.access(path, os.X_OK)), None)
 
 
 pytestmark = pytest.mark.skipif(
