@@ -209,3 +209,67 @@ def handset_line(track: Track, kart: KartParams, *, wear: float = 0.25) -> Racin
     xy = centre + normal * offset[:, None]
     speed, lap_time = speed_profile(xy, kart, wear)
     return RacingLine(s, offset, xy, speed, lap_time, tuple(at_checkpoint))
+
+
+SHIFT_STEP = 0.25  # [m] grid of the sideways shifts of the line whose speed profiles are computed
+WALL_CLEARANCE = 1.0  # [m] a shifted path keeps this far inside the walls (the racing line's own margin)
+REFERENCE_WEAR = 0.25  # tyre wear the shifted profiles are computed at (the race's start, as the line's)
+
+
+@dataclass(frozen=True)
+class ShiftedLines:
+    """The racing line moved sideways by each of ``shifts`` [m] (clipped ``WALL_CLEARANCE`` inside the walls):
+    each shifted path's positions and speed profile under the kart's limits. A kart driving off the line (in
+    another lane: alongside, passing, defending) drives one of these paths, wider or tighter than the line, so
+    its cornering and braking speeds are this path's, not the line's."""
+
+    shifts: np.ndarray  # (K,) [m] left-positive shift from the line
+    s: np.ndarray  # (M,) [m] centre-line progress of the samples (the line's)
+    xy: np.ndarray  # (K, M, 2) [m] positions of each shifted path
+    speed: np.ndarray  # (K, M) [m/s] speed profile of each shifted path
+
+    @cached_property
+    def _closed(self) -> tuple[float, np.ndarray, np.ndarray]:
+        length = float(self.s[-1] + (self.s[1] - self.s[0]))
+        return length, np.append(self.s, self.s[0] + length), np.concatenate([self.speed, self.speed[:, :1]], axis=1)
+
+    def speed_at(self, s: float, shift: float) -> float:
+        """Speed [m/s] of the path ``shift`` [m] beside the line at centre-line progress ``s`` (interpolated in
+        both; shifts beyond the grid take its edge)."""
+        length, s_closed, speed_closed = self._closed
+        u = float(np.mod(s, length))
+        k = int(np.clip(np.searchsorted(s_closed, u, side="right") - 1, 0, len(s_closed) - 2))
+        f = (u - s_closed[k]) / max(s_closed[k + 1] - s_closed[k], 1e-9)
+        x = float(np.clip((shift - self.shifts[0]) / SHIFT_STEP, 0.0, len(self.shifts) - 1.0))
+        j = min(int(x), len(self.shifts) - 2)
+        g = x - j
+        low = speed_closed[j, k] + f * (speed_closed[j, k + 1] - speed_closed[j, k])
+        high = speed_closed[j + 1, k] + f * (speed_closed[j + 1, k + 1] - speed_closed[j + 1, k])
+        return float(low + g * (high - low))
+
+
+_SHIFTED: dict[tuple[object, ...], ShiftedLines] = {}
+
+
+def shifted_lines(track: Track, line: RacingLine, kart: KartParams) -> ShiftedLines:
+    """:class:`ShiftedLines` of ``line`` on ``track`` at :data:`REFERENCE_WEAR`, cached per track, kart and line."""
+    key = (track.name, float(track.length), track.n_checkpoints, kart, float(line.lap_time))
+    cached = _SHIFTED.get(key)
+    if cached is not None:
+        return cached
+    period = track.length
+    centre = np.stack([np.interp(line.s, track.centre_s, track.centre_xy[:, k], period=period) for k in (0, 1)], 1)
+    normal = np.stack([np.interp(line.s, track.centre_s, track.centre_normal[:, k], period=period) for k in (0, 1)], 1)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    left = np.interp(line.s, track.centre_s, track.width_left, period=period) - WALL_CLEARANCE
+    right = np.interp(line.s, track.centre_s, track.width_right, period=period) - WALL_CLEARANCE
+    reach = float(np.max(left + right))
+    shifts = np.arange(-reach, reach + SHIFT_STEP, SHIFT_STEP)
+    xy = np.zeros((len(shifts), len(line.s), 2))
+    speed = np.zeros((len(shifts), len(line.s)))
+    for k, shift in enumerate(shifts):
+        offset = np.clip(line.offset + shift, -right, left)
+        xy[k] = centre + normal * offset[:, None]
+        speed[k], _ = speed_profile(xy[k], kart, REFERENCE_WEAR)
+    cached = _SHIFTED[key] = ShiftedLines(shifts, np.asarray(line.s, dtype=float), xy, speed)
+    return cached

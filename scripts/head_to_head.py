@@ -2,17 +2,52 @@
 per-race figures summed up. Prints one line per race and a JSON summary as the last line.
 
     .venv/bin/python scripts/head_to_head.py --track complex --karts mcts-lqng,fixed-lqng --races 50
+
+``--workers N`` races N at a time in separate processes; every race is seeded, so the lines and the summary are
+the same as one process gives, in the same order.
 """
 
 from __future__ import annotations
 
 import json
 import statistics
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
 
 import typer
 
 from controllers.race import RaceSpec, run_race
 from controllers.race_metrics import RaceMetrics
+from sim_core.world import RaceResult
+
+
+@dataclass(frozen=True)
+class RaceRun:
+    """One race of the series and the measurements beyond its result."""
+
+    index: int
+    seed: int
+    lanes: tuple[int, int]
+    result: RaceResult
+    right: tuple[int, ...]  # per kart: opponent lane predictions that came true
+    judged: tuple[int, ...]  # per kart: predictions judged
+    shortest: tuple[int, ...]  # per kart: fewest ego waypoints of an applied tactical plan (99: none)
+
+
+def race_once(track: str, names: tuple[str, ...], index: int, seed: int) -> RaceRun:
+    """Race ``names`` on ``track``: kart 0 starts in lane 2 when ``index`` is even, lane 3 when odd."""
+    lanes = (2, 3) if index % 2 == 0 else (3, 2)
+    metrics = RaceMetrics(len(names))
+    outcome = run_race(RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes), on_step=metrics)
+    right, judged = [0] * len(names), [0] * len(names)
+    for predictor, predicted, checkpoint, lane in metrics.predictions:
+        actual = metrics.crossings.get((predicted, checkpoint))
+        if actual is not None:
+            judged[predictor] += 1
+            right[predictor] += int(actual == lane)
+    shortest = tuple(metrics.shortest_plan.get(k, 99) for k in range(len(names)))
+    return RaceRun(index, seed, lanes, outcome.result, tuple(right), tuple(judged), shortest)
+
 
 app = typer.Typer(add_completion=False)
 
@@ -23,6 +58,7 @@ def main(
     karts: str = typer.Option("mcts-lqng,fixed-lqng", help="two registered controllers, comma separated"),
     races: int = typer.Option(50, min=1),
     first_seed: int = typer.Option(0),
+    workers: int = typer.Option(1, min=1, help="races run at a time, each in its own process"),
 ) -> None:
     """Race ``karts`` ``races`` times; kart 0 starts in lane 2 in even races and lane 3 in odd ones."""
     names = tuple(karts.split(","))
@@ -45,43 +81,44 @@ def main(
         for _ in names
     ]
     right, judged, shortest = [0] * len(names), [0] * len(names), [99] * len(names)
-    for i in range(races):
-        seed = first_seed + i
-        lanes = (2, 3) if i % 2 == 0 else (3, 2)
-        metrics = RaceMetrics(len(names))
-        outcome = run_race(RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes), on_step=metrics)
-        result = outcome.result
-        for predictor, predicted, checkpoint, lane in metrics.predictions:
-            actual = metrics.crossings.get((predicted, checkpoint))
-            if actual is not None:
-                judged[predictor] += 1
-                right[predictor] += int(actual == lane)
-        for planner, fewest in metrics.shortest_plan.items():
-            shortest[planner] = min(shortest[planner], fewest)
-        if result.winner is not None:
-            wins[result.winner] += 1
-        for k, kart in enumerate(result.karts):
-            stats = per_kart[k]
-            finished[k] += kart.finished
-            stats["faults"].append(kart.collisions_at_fault)
-            stats["illegal"].append(kart.illegal_lane_changes)
-            stats["illegal_per_step"].append(kart.illegal_lane_changes_per_step)
-            stats["illegal_checkpoint"].append(kart.illegal_lane_changes_checkpoint)
-            stats["safety"].append(kart.safety_score)
-            stats["passes"].append(kart.passes)
-            if kart.delta_r is not None:
-                stats["delta_r"].append(kart.delta_r)
-            if kart.delta_v is not None:
-                stats["delta_v"].append(kart.delta_v)
-            if kart.finish_time is not None:
-                stats["time"].append(kart.finish_time)
-        figures = [
-            f"{names[k]} {kart.finish_time or float('nan'):.2f}s "
-            f"f{kart.collisions_at_fault} i{kart.illegal_lane_changes_per_step}/{kart.illegal_lane_changes_checkpoint} "
-            f"p{kart.passes}"
-            for k, kart in enumerate(result.karts)
-        ]
-        print(f"race {i:3d} seed {seed} lanes {lanes} winner {result.winner} | " + " | ".join(figures), flush=True)
+    seeds = [first_seed + i for i in range(races)]
+    with ProcessPoolExecutor(workers) as pool:
+        mapper = pool.map if workers > 1 else map
+        for run in mapper(race_once, [track] * races, [names] * races, range(races), seeds):
+            result = run.result
+            for k in range(len(names)):
+                right[k] += run.right[k]
+                judged[k] += run.judged[k]
+                shortest[k] = min(shortest[k], run.shortest[k])
+            if result.winner is not None:
+                wins[result.winner] += 1
+            for k, kart in enumerate(result.karts):
+                stats = per_kart[k]
+                finished[k] += kart.finished
+                stats["faults"].append(kart.collisions_at_fault)
+                stats["illegal"].append(kart.illegal_lane_changes)
+                stats["illegal_per_step"].append(kart.illegal_lane_changes_per_step)
+                stats["illegal_checkpoint"].append(kart.illegal_lane_changes_checkpoint)
+                stats["safety"].append(kart.safety_score)
+                stats["passes"].append(kart.passes)
+                if kart.delta_r is not None:
+                    stats["delta_r"].append(kart.delta_r)
+                if kart.delta_v is not None:
+                    stats["delta_v"].append(kart.delta_v)
+                if kart.finish_time is not None:
+                    stats["time"].append(kart.finish_time)
+            figures = [
+                f"{names[k]} {kart.finish_time or float('nan'):.2f}s "
+                f"f{kart.collisions_at_fault} "
+                f"i{kart.illegal_lane_changes_per_step}/{kart.illegal_lane_changes_checkpoint} "
+                f"p{kart.passes}"
+                for k, kart in enumerate(result.karts)
+            ]
+            print(
+                f"race {run.index:3d} seed {run.seed} lanes {run.lanes} winner {result.winner} | "
+                + " | ".join(figures),
+                flush=True,
+            )
     summary: dict[str, object] = {
         "track": track,
         "races": races,

@@ -22,13 +22,11 @@ import math
 
 import numpy as np
 
-from controllers.racing_line import RacingLine, speed_profile
+from controllers.racing_line import REFERENCE_WEAR, RacingLine, shifted_lines
 from controllers.tactical.game import TIME_UNITS_PER_S, GameTables
 from sim_core.kart import lateral_limit
 from sim_core.params import KartParams
 from sim_core.track import Track
-
-_SHIFT_TIMES: dict[tuple[object, ...], tuple[np.ndarray, np.ndarray]] = {}
 
 
 def section_times(xy: np.ndarray, speed: np.ndarray, sample_section: np.ndarray, n: int) -> np.ndarray:
@@ -40,34 +38,15 @@ def section_times(xy: np.ndarray, speed: np.ndarray, sample_section: np.ndarray,
 
 def shifted_line_times(track: Track, line: RacingLine, kart: KartParams) -> tuple[np.ndarray, np.ndarray]:
     """(shifts, times): each section's time (len(shifts), N) on the line moved sideways by each shift [m]
-    (clipped ``WALL_CLEARANCE`` inside the walls), at the reference tyre wear; cached per track and kart."""
-    key = (track.name, float(track.length), track.n_checkpoints, kart, float(line.lap_time))
-    cached = _SHIFT_TIMES.get(key)
-    if cached is not None:
-        return cached
+    (:func:`~controllers.racing_line.shifted_lines`, at its reference tyre wear)."""
+    paths = shifted_lines(track, line, kart)
     n = track.n_checkpoints
     s_cp = np.asarray(track.checkpoint_s, dtype=float) % track.length
     sample_section = (np.searchsorted(s_cp, line.s, side="right") - 1) % n
-    period = track.length
-    centre = np.stack([np.interp(line.s, track.centre_s, track.centre_xy[:, k], period=period) for k in (0, 1)], 1)
-    normal = np.stack([np.interp(line.s, track.centre_s, track.centre_normal[:, k], period=period) for k in (0, 1)], 1)
-    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    left = np.interp(line.s, track.centre_s, track.width_left, period=period) - WALL_CLEARANCE
-    right = np.interp(line.s, track.centre_s, track.width_right, period=period) - WALL_CLEARANCE
-    reach = float(np.max(left + right))
-    shifts = np.arange(-reach, reach + SHIFT_STEP, SHIFT_STEP)
-    times = np.zeros((len(shifts), n))
-    for k, shift in enumerate(shifts):
-        offset = np.clip(line.offset + shift, -right, left)
-        xy = centre + normal * offset[:, None]
-        speed, _ = speed_profile(xy, kart, REFERENCE_WEAR)
-        times[k] = section_times(xy, speed, sample_section, n)
-    _SHIFT_TIMES[key] = (shifts, times)
-    return shifts, times
+    times = np.array([section_times(xy, speed, sample_section, n) for xy, speed in zip(paths.xy, paths.speed)])
+    return paths.shifts, times
 
 
-SHIFT_STEP = 0.25  # [m] grid of the sideways shifts of the line that are timed
-WALL_CLEARANCE = 1.0  # [m] a shifted path keeps this far inside the walls (the racing line's own margin)
 # the tracker drives an off-line lane as kinked blends between lane points, not as a smooth shifted line: the
 # shifted line's extra time, times this, is what a lane off the line costs in a race
 TRACKING_FACTOR = 2.0
@@ -76,7 +55,6 @@ TRACKING_FACTOR = 2.0
 LANE_CHANGE_COST = 0.02
 LANE_CHANGE_COST_SQ = 0.01
 MIN_PENALTY = -0.1  # [s] a shifted line is never credited more than this on one section
-REFERENCE_WEAR = 0.25  # tyre wear the equivalent cornering radius is taken at (the race's start)
 OPEN_RADIUS = 1.0e4  # [m] a curve the line takes at top speed
 
 

@@ -131,6 +131,7 @@ class MCTSPlanner:
         ]
         plan = self._planner.plan(players, observation.ego, self._committed)
         me = next(p for p in players if p.kart == observation.ego)
+        plan = self._fill_skipped(plan, me)
         if self.racing_line:
             plan = self._prefer_racing_line(plan, me.lane, me.lane_changes)
         # the root's own crossing (the lane the kart is committed to at its next checkpoint) leads the plan
@@ -139,6 +140,23 @@ class MCTSPlanner:
         plan = replace(plan, waypoints={**plan.waypoints, plan.ego: (first, *plan.ego_waypoints)})
         self._committed = {w.checkpoint: w.lane for w in plan.ego_waypoints}
         return plan
+
+    def _fill_skipped(self, plan: Plan, me: PlayerState) -> Plan:
+        """``plan`` with ego waypoints at the checkpoints between the ego's next one and the game's root, which
+        the search never plays: a kart behind the leader's checkpoint enters the game advanced to it in its own
+        lane (:meth:`~controllers.tactical.planner.TacticalPlanner.root_state`). Without them the tracker would
+        skip a checkpoint's lane, and the next plan would take whatever lane the kart then happens to be in.
+        They hold the ego's lane here; :meth:`_prefer_racing_line` then moves them to the line where legal."""
+        assert self._context is not None
+        track = self._context.track
+        skipped = range(me.checkpoint + 1, plan.root_checkpoint + 1)
+        if not skipped:
+            return plan
+        filled = []
+        for c in skipped:
+            point = track.lane_point(c, me.lane)
+            filled.append(Waypoint(c, me.lane, (float(point[0]), float(point[1])), me.speed, 0.0))
+        return replace(plan, waypoints={**plan.waypoints, plan.ego: (*filled, *plan.ego_waypoints)})
 
     def _prefer_racing_line(self, plan: Plan, lane: int, count: int) -> Plan:
         """``plan`` with every non-tactical ego waypoint moved to the racing line's lane where that is legal,

@@ -152,13 +152,24 @@ def lane_gate(tb: GameTables, state: np.ndarray, p: int, lane: int) -> tuple[int
     # (or into a lane from which no lane of the next section is reachable at the lowest speed bin)
     nxt = (c + 1) % n
     wear_then = worn_after(tb, state[p, WEAR], tb.turn_angle[c])
+    bin_width = tb.bin_high[0] - tb.bin_low[0]
+    last_bin = tb.bin_low.shape[0] - 1
     entry = 0.0
     for j in range(tb.distance.shape[1]):
         _, blocked = lane_change_update(count, lane, j, tb.straight[nxt], tb.straight[(nxt + 1) % n], tb.lane_limit)
         v_next = corner_speed(tb, tb.corner_radius[nxt, lane, j], wear_then)
-        if blocked or v_next < tb.bin_low[0]:
+        # a corner slower than the lowest bin is still reachable: the lowest bin stands for every speed up to
+        # its top (at the wear of the race's last laps the hairpins fall below it, and a game whose every
+        # line ends in a dead end there cannot rank anything)
+        if blocked:
             continue
-        entry = max(entry, math.sqrt(v_next * v_next + 2.0 * tb.brake * tb.distance[nxt, lane, j]))
+        # the next move arrives at no more than its bin's middle (or the corner speed below it): the fastest
+        # arrival here is the one that can still brake down to that over the next section
+        v_reach = v_next
+        if v_next >= tb.bin_low[0]:
+            k = min(int((v_next - tb.bin_low[0]) / bin_width), last_bin)
+            v_reach = min(0.5 * (tb.bin_low[k] + tb.bin_high[k]), v_next)
+        entry = max(entry, math.sqrt(v_reach * v_reach + 2.0 * tb.brake * tb.distance[nxt, lane, j]))
     return count, v_max, entry, 1
 
 
@@ -170,7 +181,7 @@ def bin_arrival(
     :func:`lane_gate` (``v_max``, ``entry``): the speed-bin half of :func:`move_outcome`."""
     middle = 0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin])
     # the next move starts from the bin's middle speed, whatever the arrival was capped to
-    if tb.bin_low[vbin] > v_max or middle > entry + 1e-9:
+    if (vbin > 0 and tb.bin_low[vbin] > v_max) or middle > entry + 1e-9:
         return 0, 0
     c = state[p, CHECKPOINT] % tb.straight.shape[0]
     here = state[p, LANE]

@@ -11,6 +11,7 @@ from hypothesis import strategies as hs
 
 from controllers.base import RaceContext
 from controllers.plan import Plan, Waypoint
+from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import BEHIND_WINDOW, INTERACTION_WINDOW, MCTSPlanner, _lanes_legal
 from sim_core.observation import observe
 from sim_core.params import PAPER_KART, SimParams
@@ -84,3 +85,36 @@ def test_a_standing_start_beside_another_kart_keeps_its_lane_or_moves_away() -> 
             away = (lanes[0] - lanes[1]) > 0  # the ego's side of the other kart
             for w in plan.ego_waypoints[:3]:  # while the two are still alongside
                 assert w.lane == lanes[0] or (w.lane > lanes[0]) == away, f"lane {w.lane} crosses toward the other"
+
+
+def test_a_kart_behind_the_games_root_gets_a_waypoint_at_every_checkpoint() -> None:
+    """The game starts at the leading kart's checkpoint; a follower a checkpoint or two behind enters it advanced
+    in its own lane. Its plan must still name a lane at each checkpoint it has to cross before that (else the
+    tracker skips a checkpoint and the next plan inherits whatever lane the kart drifted into), and those lanes
+    keep to the lane-change rule."""
+    n = TRACK.n_checkpoints
+    for behind in (1, 2):
+        for lane in (1, 2, 3, 4):
+            planner = MCTSPlanner(iterations=200)
+            planner.reset(RaceContext(TRACK, PAPER_KART, 0, 2, TRACK.lane_change_limit, 7))
+            cp = 30 + behind  # the leader has passed this many checkpoints; the ego ``behind`` fewer
+            s_leader = float(TRACK.checkpoint_s[cp % n]) + 2.0
+            s_ego = float(TRACK.checkpoint_s[(cp - behind) % n]) + 2.0
+            leader = replace(OBSERVATION.karts[1], checkpoints_passed=cp, progress=s_leader, speed=12.0, lane=3)
+            lateral = float(TRACK.lane_offsets(cp - behind + 1)[lane - 1])
+            me = replace(
+                OBSERVATION.me,
+                checkpoints_passed=cp - behind,
+                progress=s_ego,
+                lateral=lateral,
+                speed=12.0,
+                lane=lane,
+                lane_changes=0,
+            )
+            observation = replace(OBSERVATION, time=40.0, karts=(me, leader))
+            plan = planner.plan(observation)
+            checkpoints = [w.checkpoint for w in plan.ego_waypoints]
+            assert checkpoints == list(range(cp - behind + 1, cp - behind + 1 + len(checkpoints)))
+            assert len(checkpoints) >= GameParams().horizon
+            assert plan.ego_waypoints[0].lane == lane  # heading for its next checkpoint in its own lane
+            assert _lanes_legal(TRACK, me.lane, me.lane_changes, list(plan.ego_waypoints), TRACK.lane_change_limit)

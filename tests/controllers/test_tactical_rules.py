@@ -9,6 +9,7 @@ from hypothesis import strategies as hs
 
 from controllers.tactical import rules
 from controllers.tactical.game import GameParams, build_tables
+from controllers.tactical.motion import segment_time
 from controllers.tactical.value import terminal_values
 from sim_core.params import PAPER_KART
 from sim_core.rules import lane_change_update
@@ -75,11 +76,17 @@ def test_random_legal_play_never_breaks_a_rule(seed: int, key, n_players: int, s
                 tb.lane_limit,
             )
             assert not illegal
-            # cornering: the bin's lower edge is within the cornering speed of the lane's radius at the wear
-            assert (
-                tb.bin_low[vbin]
-                <= rules.corner_speed(tb, tb.corner_radius[c, before[rules.LANE], lane], int(before[rules.WEAR])) + 1e-9
-            )
+            # cornering: above the lowest bin, the bin's lower edge is within the cornering speed of the lane's
+            # radius at the wear; the lowest bin stands for any speed up to its top (a worn hairpin is slower
+            # than it), and every move is timed arriving at no more than the cornering speed
+            v_corner = rules.corner_speed(tb, tb.corner_radius[c, before[rules.LANE], lane], int(before[rules.WEAR]))
+            assert vbin == 0 or tb.bin_low[vbin] <= v_corner + 1e-9
+            v0 = 0.5 * (tb.bin_low[before[rules.BIN]] + tb.bin_high[before[rules.BIN]])
+            v1 = min(0.5 * (tb.bin_low[vbin] + tb.bin_high[vbin]), v_corner)
+            seconds = segment_time(tb.distance[c, before[rules.LANE], lane], v0, v1, tb.accel, tb.brake, v_corner)
+            assert seconds > 0.0
+            penalty = tb.penalty[c, before[rules.LANE], lane]
+            assert state[p, rules.TIME] == before[rules.TIME] + int(seconds * 100.0 + penalty + 0.5)
             # collision pruning: nobody already at this checkpoint within the window in this lane, or with the
             # two paths crossing (the sides swapped since the previous checkpoint)
             for q in range(n_players):
@@ -115,11 +122,19 @@ def test_cornering_rules_out_fast_bins_in_the_hairpin() -> None:
     state[0, rules.WEAR] = 2500
     moves = np.empty(64, dtype=np.int64)
     count = rules.legal_moves(tb, state, 0, moves)
-    lanes = {int(m) // len(tb.bin_low) for m in moves[:count]}
-    assert 0 not in lanes  # radius 1 m allows ~3.5 m/s, below the lowest bin (6 m/s)
+    bins = len(tb.bin_low)
+    inside = [int(m) % bins for m in moves[:count] if int(m) // bins == 0]
+    # radius 1 m allows ~3.5 m/s, below the lowest bin (6 m/s): only the lowest (crawling) bin is legal there,
+    # and the move is timed at the cornering speed, not at the bin's
+    v_corner = rules.corner_speed(tb, tb.corner_radius[11, 0, 0], 2500)
+    assert v_corner < tb.bin_low[0]
+    assert set(inside) <= {0}
+    for vbin in inside:
+        arrival, _, ok = rules.move_outcome(tb, state, 0, 0, vbin)
+        assert ok and arrival >= 100.0 * tb.distance[11, 0, 0] / tb.bin_low[0]
     for m in moves[:count]:
-        lane, vbin = divmod(int(m), len(tb.bin_low))
-        assert tb.bin_low[vbin] <= rules.corner_speed(tb, tb.corner_radius[11, 0, lane], 2500)
+        lane, vbin = divmod(int(m), bins)
+        assert vbin == 0 or tb.bin_low[vbin] <= rules.corner_speed(tb, tb.corner_radius[11, 0, lane], 2500)
 
 
 def test_wear_grows_through_curves_only() -> None:
@@ -158,6 +173,34 @@ def test_a_lone_kart_never_runs_into_a_dead_end() -> None:
                 state[0, rules.BIN] = 0
                 out = np.zeros((n, 2), dtype=np.int64)
                 assert greedy_line(tb, state, start, start + n, out) == n
+
+
+@pytest.mark.parametrize("name", ["oval", "complex"])
+def test_worn_tyres_never_lead_a_lone_kart_into_a_dead_end(name: str) -> None:
+    """With the line-calibrated tables of a race and the tyres of its last lap (wear 0.5), the hairpins' corner
+    speeds fall below the lowest speed bin: they are still taken (in that bin, at their own speed), so the
+    fastest legal line from any lane at any checkpoint completes a lap. Before, every line through a worn
+    hairpin was a dead end, and a game whose every line is a dead end ranks nothing."""
+    from controllers.racing_line import optimise_racing_line
+    from controllers.tactical.calibration import calibrate_tables
+    from controllers.tactical.mcts import greedy_line
+
+    track = get_track(name)
+    tb = calibrate_tables(
+        build_tables(track, PAPER_KART, GameParams()), track, optimise_racing_line(track, PAPER_KART), PAPER_KART
+    )
+    n = len(tb.straight)
+    slowest = min(rules.corner_speed(tb, float(tb.corner_radius[c].min()), 5000) for c in range(n))
+    for start in range(n):
+        for lane in range(4):
+            state = np.zeros((1, rules.N_FIELDS), dtype=np.int64)
+            state[0, rules.CHECKPOINT] = start
+            state[0, rules.LANE] = state[0, rules.PREV_LANE] = lane
+            state[0, rules.WEAR] = 5000
+            out = np.zeros((n, 2), dtype=np.int64)
+            assert greedy_line(tb, state, start, start + n, out) == n, (start, lane)
+    if name == "complex":
+        assert slowest < tb.bin_low[0]  # the case this test is about does occur
 
 
 def test_players_side_by_side_may_not_swap_sides() -> None:
