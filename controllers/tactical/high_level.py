@@ -28,6 +28,9 @@ INTERACTION_WINDOW = 1.0  # [s] another kart predicted at a checkpoint this much
 # [s] ... or this much later: a kart behind by more than about a kart length cannot be blocked without losing
 # time (it must keep its distance, the follower's duty), so a leader defends by driving the racing line
 BEHIND_WINDOW = 0.15
+MAX_SQUEEZE_LOOKAHEAD = (
+    2.0  # [s] how far ahead a kart alongside is extrapolated sideways (:meth:`MCTSPlanner._no_squeeze`)
+)
 
 
 def _lanes_legal(track: Track, lane: int, count: int, waypoints: list[Waypoint], limit: int) -> bool:
@@ -121,8 +124,49 @@ class MCTSPlanner:
             modelled=kart.index != ego,
         )
 
+    def _no_squeeze(self, plan: Plan, me: PlayerState, karts: tuple[KartView, ...]) -> Plan:
+        """``plan`` with the ego's first waypoint after its next checkpoint kept in the ego's lane there when it
+        would steer toward a kart now alongside (closer along the track than the game's collision distance) and
+        end closer than the game's lateral clearance to where that kart will be (at its present sideways speed),
+        or beyond it, where the lane-change rule allows. The game starts from the next crossings and times the
+        karts' moves apart by their speed bins, so it can send the ego across a kart it is level with (both at
+        fault)."""
+        assert self._context is not None
+        track = self._context.track
+        here = next(k for k in karts if k.index == me.kart)
+        waypoints = list(plan.ego_waypoints)
+        if not waypoints or waypoints[0].checkpoint != me.checkpoint + 1 or waypoints[0].lane == me.lane:
+            return plan
+        first = waypoints[0]
+        toward = first.lane - me.lane  # > 0: toward the right (lane ids grow to the right)
+        s_first = float(track.checkpoint_s[first.checkpoint % track.n_checkpoints])
+        reach_time = min(((s_first - here.progress) % track.length) / max(here.speed, 1.0), MAX_SQUEEZE_LOOKAHEAD)
+        target = float(track.lane_offsets(first.checkpoint)[first.lane - 1])
+        for other in karts:
+            if other.index == me.kart or other.finished:
+                continue
+            gap = (other.progress - here.progress + 0.5 * track.length) % track.length - 0.5 * track.length
+            side = other.lateral - here.lateral  # > 0: it is on my left
+            if abs(gap) >= self.params.collision_distance or toward * side >= 0:
+                continue
+            # where it will be by then, at its present sideways speed
+            _, tangent = track.point_at(other.progress)
+            drift = other.speed * math.sin(other.heading - math.atan2(float(tangent[1]), float(tangent[0])))
+            # it stays on its side of my new lane by the clearance, or we squeeze (or cross) each other
+            if (
+                math.copysign(1.0, side) * (other.lateral + drift * reach_time - target)
+                >= self.params.lateral_clearance
+            ):
+                continue
+            point = track.lane_point(first.checkpoint, me.lane)
+            kept = replace(first, lane=me.lane, position=(float(point[0]), float(point[1])))
+            if _lanes_legal(track, me.lane, me.lane_changes, [kept, *waypoints[1:]], self._context.lane_change_limit):
+                return replace(plan, waypoints={**plan.waypoints, plan.ego: (kept, *waypoints[1:])})
+        return plan
+
     def plan(self, observation: Observation) -> Plan:
-        """Search from every kart's predicted crossing of its next checkpoint (:meth:`present_state`)."""
+        """Search from every kart's predicted crossing of its next checkpoint (:meth:`present_state`); the ego
+        does not steer into a kart alongside it (:meth:`_no_squeeze`)."""
         assert self._planner is not None, "reset() first"
         players = [
             self.present_state(k, observation.time, observation.ego)
@@ -134,6 +178,7 @@ class MCTSPlanner:
         plan = self._fill_skipped(plan, me)
         if self.racing_line:
             plan = self._prefer_racing_line(plan, me.lane, me.lane_changes)
+        plan = self._no_squeeze(plan, me, observation.karts)
         # the root's own crossing (the lane the kart is committed to at its next checkpoint) leads the plan
         point = self._context.track.lane_point(me.checkpoint, me.lane) if self._context else (0.0, 0.0)
         first = Waypoint(me.checkpoint, me.lane, (float(point[0]), float(point[1])), me.speed, 0.0)

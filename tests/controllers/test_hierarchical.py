@@ -3,9 +3,11 @@ lane-change rule to get there; from a standing start beside another kart it keep
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as hs
 
@@ -118,3 +120,45 @@ def test_a_kart_behind_the_games_root_gets_a_waypoint_at_every_checkpoint() -> N
             assert len(checkpoints) >= GameParams().horizon
             assert plan.ego_waypoints[0].lane == lane  # heading for its next checkpoint in its own lane
             assert _lanes_legal(TRACK, me.lane, me.lane_changes, list(plan.ego_waypoints), TRACK.lane_change_limit)
+
+
+@pytest.mark.parametrize("track_name", ["oval", "oval-reversed", "complex", "complex-reversed"])
+def test_a_kart_level_with_another_does_not_steer_across_it(track_name: str) -> None:
+    """From the grid, side by side: the ego's next two lanes never lie toward the other kart. On
+    ``oval-reversed`` the search sends a lane-2 starter toward lane 3 at checkpoint 2 (it times the other
+    kart's move a speed bin slower), across a line follower moving over from lane 3: both were at fault in
+    every such race of the session-6 series."""
+    track = get_track(track_name)
+    for lanes in ((2, 3), (3, 2)):
+        world = World(track, 1, 2, SimParams(kart=PAPER_KART))
+        world.reset(start_lanes=lanes)
+        observation = observe(world, 0)[0]
+        planner = MCTSPlanner()
+        planner.reset(RaceContext(track, PAPER_KART, 0, 2, track.lane_change_limit, 0))
+        plan = planner.plan(observation)
+        toward_right = lanes[1] > lanes[0]
+        for w in plan.ego_waypoints[:2]:
+            assert w.lane == lanes[0] or (w.lane > lanes[0]) != toward_right, f"lane {w.lane} at {w.checkpoint}"
+
+
+def test_a_kart_alongside_that_drifts_away_leaves_the_plan_alone() -> None:
+    """The rule holds the ego's lane only against a kart that will still be in the way: the same kart alongside,
+    moving away fast enough, does not change the plan; moving toward the ego (or standing), it does."""
+    track = get_track("oval-reversed")
+    world = World(track, 1, 2, SimParams(kart=PAPER_KART))
+    world.reset(start_lanes=(2, 3))
+    observation = observe(world, 0)[0]
+    planner = MCTSPlanner()
+    planner.reset(RaceContext(track, PAPER_KART, 0, 2, track.lane_change_limit, 0))
+    me = planner.present_state(observation.me, 0.0, 0)
+    first = track.lane_point(me.checkpoint + 1, 3)
+    across = Waypoint(me.checkpoint + 1, 3, (float(first[0]), float(first[1])), 12.0, 1.0)
+    plan = Plan(0, me.checkpoint, {0: (across,), 1: ()}, 1, 1, 0.0)
+    mover = observation.karts[1]
+    _, tangent = track.point_at(mover.progress)
+    along = math.atan2(float(tangent[1]), float(tangent[0]))
+    for heading_off, squeezed in ((0.0, True), (0.3, True), (-0.6, False)):  # left-positive: +0.3 moves toward me
+        other = replace(mover, speed=6.0, heading=along + heading_off)
+        ego = replace(observation.me, speed=6.0)
+        out = planner._no_squeeze(plan, me, (ego, other))
+        assert (out.ego_waypoints[0].lane == me.lane) == squeezed, heading_off
