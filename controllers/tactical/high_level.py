@@ -126,7 +126,8 @@ class MCTSPlanner:
 
     def _no_squeeze(self, plan: Plan, me: PlayerState, karts: tuple[KartView, ...]) -> Plan:
         """``plan`` with the ego's first waypoint after its next checkpoint kept in the ego's lane there when it
-        would steer toward a kart now alongside (closer along the track than the game's collision distance) and
+        would steer toward a kart now alongside (ahead by less than the game's collision distance, or behind with
+        its body still overlapping the ego's) and
         end closer than the game's lateral clearance to where that kart will be (at its present sideways speed),
         or beyond it, where the lane-change rule allows. The game starts from the next crossings and times the
         karts' moves apart by their speed bins, so it can send the ego across a kart it is level with (both at
@@ -142,12 +143,18 @@ class MCTSPlanner:
         s_first = float(track.checkpoint_s[first.checkpoint % track.n_checkpoints])
         reach_time = min(((s_first - here.progress) % track.length) / max(here.speed, 1.0), MAX_SQUEEZE_LOOKAHEAD)
         target = float(track.lane_offsets(first.checkpoint)[first.lane - 1])
+        kart = self._context.kart
+        body_length = 2.0 * (kart.body_half_length + kart.body_radius)
         for other in karts:
             if other.index == me.kart or other.finished:
                 continue
             gap = (other.progress - here.progress + 0.5 * track.length) % track.length - 0.5 * track.length
             side = other.lateral - here.lateral  # > 0: it is on my left
-            if abs(gap) >= self.params.collision_distance or toward * side >= 0:
+            # ahead: anything within the collision distance is ours to avoid; behind: only a kart still
+            # overlapping us, since a follower clear of our tail must keep its distance (and crossing in front
+            # of it is how a leader takes the line: holding our lane there lost 9 of 25 lane-2 starts on
+            # complex-reversed in the session-7 series)
+            if not (-body_length < gap < self.params.collision_distance) or toward * side >= 0:
                 continue
             # where it will be by then, at its present sideways speed
             _, tangent = track.point_at(other.progress)

@@ -17,12 +17,13 @@ from numba import njit
 from controllers.tactical import rules
 from controllers.tactical.game import GameTables
 from controllers.tactical.value import terminal_values
+from sim_core.kernel_arrays import NO_REFCOUNT
 
 NO_NODE = -1
 REJECTION_TRIES = 8  # random legal move in rollouts: draws before falling back to listing every legal move
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)
 def _round_of(state: np.ndarray, start_round: int, final_round: int) -> int:
     """The checkpoint whose round is being played: the lowest checkpoint any player still stands on."""
     r = start_round
@@ -31,30 +32,30 @@ def _round_of(state: np.ndarray, start_round: int, final_round: int) -> int:
     return r
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)
 def _fastest_outcome(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins: int) -> tuple[int, int, int]:
     """(action, arrival, lane-change count) of the legal move with the earliest arrival (then the smaller lane
-    change); action -1 if there is none."""
+    change); action -1 if there is none. A modelled player keeps to its lane (:func:`rules.allowed_lane`)."""
+    grip_now, grip_next = rules.mover_grip(tb, state, p)
+    only = rules.model_lane(tb, state, p)
+    if only >= 0:
+        vbin, arrival, count = rules.fastest_in_lane(tb, state, p, only, grip_now, grip_next)
+        if vbin >= 0:
+            return only * bins + vbin, arrival, count
+        # no legal move in the line's lane: it avoids like anyone (and that lane has nothing to offer)
     action, best_key, best_arrival, best_count = -1, 1 << 60, 0, 0
-    only = rules.allowed_lane(tb, state, p)
     for lane in range(n_lanes):
-        if only >= 0 and lane != only:
+        if lane == only:
             continue
-        count, v_max, entry, gate = rules.lane_gate(tb, state, p, lane)
-        if not gate:
-            continue
-        # a higher arrival speed never arrives later, so the first legal bin from the top is this lane's fastest
-        for vbin in range(bins - 1, -1, -1):
-            arrival, ok = rules.bin_arrival(tb, state, p, lane, vbin, v_max, entry)
-            if ok:
-                key = arrival * 8 + abs(lane - state[p, rules.LANE])
-                if key < best_key:
-                    action, best_key, best_arrival, best_count = lane * bins + vbin, key, arrival, count
-                break
+        vbin, arrival, count = rules.fastest_in_lane(tb, state, p, lane, grip_now, grip_next)
+        if vbin >= 0:
+            key = arrival * 8 + abs(lane - state[p, rules.LANE])
+            if key < best_key:
+                action, best_key, best_arrival, best_count = lane * bins + vbin, key, arrival, count
     return action, best_arrival, best_count
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)
 def _stuck_values(state: np.ndarray, p: int, values: np.ndarray) -> None:
     """Values when player ``p`` has no legal move: it loses (0) and the others win (1), unless it is a modelled
     player. Then nobody gains (0.5 each): the model's line follower would brake or swerve rather than stop,
@@ -65,7 +66,7 @@ def _stuck_values(state: np.ndarray, p: int, values: np.ndarray) -> None:
         values[p] = 0.0
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)
 def _rollout(
     tb: GameTables,
     state: np.ndarray,
@@ -116,7 +117,7 @@ def _rollout(
     terminal_values(tb, state, reference, values)
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)
 def greedy_line(tb: GameTables, state: np.ndarray, round_cp: int, final_round: int, out: np.ndarray) -> int:
     """Continue ``state`` (in place) to the horizon with every player taking its fastest legal move.
 
@@ -316,21 +317,26 @@ def search(
 
 
 class SearchTree:
-    """Preallocated arrays of one search tree (capacity ``iterations + 1`` nodes)."""
+    """Preallocated arrays of one search tree (capacity ``iterations + 1`` nodes).
+
+    The arrays are not cleared: the search writes every field of a node when it creates it, and nothing at or
+    past ``size`` (nor an ``untried`` entry past the node's count) is ever read. So a tree is cheap to allocate
+    and can start afresh in the same arrays.
+    """
 
     def __init__(self, capacity: int, players: int, max_actions: int) -> None:
         self.capacity = capacity
-        self.state = np.zeros((capacity, players, rules.N_FIELDS), dtype=np.int64)
-        self.parent = np.zeros(capacity, dtype=np.int64)
-        self.action = np.zeros(capacity, dtype=np.int64)
-        self.mover = np.zeros(capacity, dtype=np.int64)
-        self.round = np.zeros(capacity, dtype=np.int64)
-        self.visits = np.zeros(capacity, dtype=np.int64)
-        self.value = np.zeros(capacity, dtype=np.float64)
-        self.first_child = np.zeros(capacity, dtype=np.int64)
-        self.next_sibling = np.zeros(capacity, dtype=np.int64)
-        self.untried = np.zeros((capacity, max_actions), dtype=np.int64)
-        self.untried_count = np.zeros(capacity, dtype=np.int64)
+        self.state = np.empty((capacity, players, rules.N_FIELDS), dtype=np.int64)
+        self.parent = np.empty(capacity, dtype=np.int64)
+        self.action = np.empty(capacity, dtype=np.int64)
+        self.mover = np.empty(capacity, dtype=np.int64)
+        self.round = np.empty(capacity, dtype=np.int64)
+        self.visits = np.empty(capacity, dtype=np.int64)
+        self.value = np.empty(capacity, dtype=np.float64)
+        self.first_child = np.empty(capacity, dtype=np.int64)
+        self.next_sibling = np.empty(capacity, dtype=np.int64)
+        self.untried = np.empty((capacity, max_actions), dtype=np.int64)
+        self.untried_count = np.empty(capacity, dtype=np.int64)
         self.size = 0
 
     def run(

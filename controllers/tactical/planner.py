@@ -71,11 +71,14 @@ class TacticalPlanner:
         self._plans = 0
         self._tree: SearchTree | None = None
         self._tree_root: np.ndarray | None = None
+        self._lane_points: dict[tuple[int, int], tuple[float, float]] = {}
 
     def reset(self) -> None:
-        """Forget the search tree and the plan counter (a new race)."""
+        """Forget the search tree and the plan counter (a new race). The tree's arrays are kept: the next
+        search starts a fresh tree in them (allocating them takes longer than a young tree's search)."""
         self._plans = 0
-        self._tree = None
+        if self._tree is not None:
+            self._tree.size = 0
         self._tree_root = None
 
     # ------------------------------------------------------------------ root
@@ -198,12 +201,11 @@ class TacticalPlanner:
             lane, vbin = divmod(action, bins)
             state = states[mover]
             checkpoint = int(state[rules.CHECKPOINT])
-            point = self.track.lane_point(checkpoint, lane + 1)
             per_player[karts[mover]].append(
                 Waypoint(
                     checkpoint=checkpoint,
                     lane=lane + 1,
-                    position=(float(point[0]), float(point[1])),
+                    position=self._lane_point(checkpoint, lane + 1),
                     speed=float(tb.bin_high[vbin]),
                     time=float(state[rules.TIME]) / TIME_UNITS_PER_S,
                 )
@@ -218,8 +220,17 @@ class TacticalPlanner:
             last = waypoints[-1] if waypoints else None
             checkpoint = last.checkpoint + 1 if last else root_cp + 1
             lane = last.lane if last else root_lane
-            point = self.track.lane_point(checkpoint, lane)
             time_s = (last.time if last else 0.0) + 1.0
             waypoints.append(
-                Waypoint(checkpoint, lane, (float(point[0]), float(point[1])), float(tb.bin_high[0]), time_s)
+                Waypoint(checkpoint, lane, self._lane_point(checkpoint, lane), float(tb.bin_high[0]), time_s)
             )
+
+    def _lane_point(self, checkpoint: int, lane: int) -> tuple[float, float]:
+        """:meth:`~sim_core.track.Track.lane_point` of ``lane`` (1-based) at ``checkpoint`` (modulo a lap), kept
+        once computed (the track's geometry query takes longer than the rest of a waypoint's extraction)."""
+        key = (checkpoint % self.track.n_checkpoints, lane)
+        point = self._lane_points.get(key)
+        if point is None:
+            xy = self.track.lane_point(checkpoint, lane)
+            point = self._lane_points[key] = (float(xy[0]), float(xy[1]))
+        return point

@@ -17,6 +17,7 @@ from numba import njit
 from controllers.tactical.game import GameTables
 from controllers.tactical.motion import segment_time
 from sim_core.kart import lateral_limit, tyre_wear, yaw_for_wear
+from sim_core.kernel_arrays import NO_REFCOUNT
 from sim_core.rules import lane_change_update
 
 # fields of a player's state
@@ -37,15 +38,27 @@ NO_PLAYER = -1
 
 
 @njit(cache=True, inline="always")
-def corner_speed(tb: GameTables, radius: float, wear_units: int) -> float:
-    """Cornering speed [m/s] on ``radius`` [m] (0 = straight: top speed) at tyre wear ``wear_units``."""
+def grip(tb: GameTables, wear_units: int) -> float:
+    """Lateral acceleration limit [m/s^2] of the kart at tyre wear ``wear_units``."""
+    return lateral_limit(tb.kart, min(wear_units / 10_000.0, 1.0))
+
+
+@njit(cache=True, inline="always")
+def corner_speed_at(tb: GameTables, radius: float, a_lat: float) -> float:
+    """Cornering speed [m/s] on ``radius`` [m] (0 = straight: top speed) with the lateral limit ``a_lat``
+    (:func:`grip`)."""
     if radius <= 0.0:
         return tb.top_speed
-    a_lat = lateral_limit(tb.kart, min(wear_units / 10_000.0, 1.0))
     return min(math.sqrt(a_lat * radius), tb.top_speed)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def corner_speed(tb: GameTables, radius: float, wear_units: int) -> float:
+    """Cornering speed [m/s] on ``radius`` [m] (0 = straight: top speed) at tyre wear ``wear_units``."""
+    return corner_speed_at(tb, radius, grip(tb, wear_units))
+
+
+@njit(**NO_REFCOUNT)
 def worn_after(tb: GameTables, wear_units: int, yaw: float) -> int:
     """Tyre wear [1e-4] after turning through ``yaw`` [rad] more (the kart's exponential wear model)."""
     if yaw <= 0.0:
@@ -54,7 +67,7 @@ def worn_after(tb: GameTables, wear_units: int, yaw: float) -> int:
     return max(int(tyre_wear(tb.kart, accumulated + yaw) * 10_000.0 + 0.5), wear_units)
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)
 def next_player(state: np.ndarray, round_checkpoint: int) -> int:
     """The player to move: among those still at ``round_checkpoint``, the one with the smallest time state.
 
@@ -134,10 +147,22 @@ def _collides(tb: GameTables, state: np.ndarray, p: int, lane: int, arrival: int
 
 
 @njit(cache=True, inline="always")
-def lane_gate(tb: GameTables, state: np.ndarray, p: int, lane: int) -> tuple[int, float, float, int]:
+def mover_grip(tb: GameTables, state: np.ndarray, p: int) -> tuple[float, float]:
+    """(lateral limit [m/s^2] now, lateral limit at the next checkpoint) of player ``p``: the tyre-wear part of
+    :func:`lane_gate`, the same for every lane (the wear model takes a log and an exp), so computed once per
+    mover by the callers that try every lane."""
+    c = state[p, CHECKPOINT] % tb.straight.shape[0]
+    return grip(tb, state[p, WEAR]), grip(tb, worn_after(tb, state[p, WEAR], tb.turn_angle[c]))
+
+
+@njit(cache=True, inline="always")
+def lane_gate(
+    tb: GameTables, state: np.ndarray, p: int, lane: int, grip_now: float, grip_next: float
+) -> tuple[int, float, float, int]:
     """(new lane-change count, cornering speed [m/s], fastest arrival the next section can brake from [m/s],
     legal flag 0/1) of player ``p`` heading for ``lane``: the part of :func:`move_outcome` that no speed bin
-    changes, computed once per lane by the callers that try every bin."""
+    changes, computed once per lane by the callers that try every bin. ``grip_now``, ``grip_next``: the
+    player's :func:`mover_grip`."""
     n = tb.straight.shape[0]
     c = state[p, CHECKPOINT] % n
     here = state[p, LANE]
@@ -147,30 +172,30 @@ def lane_gate(tb: GameTables, state: np.ndarray, p: int, lane: int) -> tuple[int
     )
     if illegal:
         return 0, 0.0, 0.0, 0
-    v_max = corner_speed(tb, tb.corner_radius[c, here, lane], state[p, WEAR])
+    v_max = corner_speed_at(tb, tb.corner_radius[c, here, lane], grip_now)
     # no arriving so fast that the next section cannot brake down to its own corner speed (a dead end)
     # (or into a lane from which no lane of the next section is reachable at the lowest speed bin)
     nxt = (c + 1) % n
-    wear_then = worn_after(tb, state[p, WEAR], tb.turn_angle[c])
     bin_width = tb.bin_high[0] - tb.bin_low[0]
     last_bin = tb.bin_low.shape[0] - 1
-    entry = 0.0
+    # the largest squared entry speed: its root is the largest root (sqrt is correctly rounded, so monotone)
+    entry_sq = 0.0
     for j in range(tb.distance.shape[1]):
         _, blocked = lane_change_update(count, lane, j, tb.straight[nxt], tb.straight[(nxt + 1) % n], tb.lane_limit)
-        v_next = corner_speed(tb, tb.corner_radius[nxt, lane, j], wear_then)
         # a corner slower than the lowest bin is still reachable: the lowest bin stands for every speed up to
         # its top (at the wear of the race's last laps the hairpins fall below it, and a game whose every
         # line ends in a dead end there cannot rank anything)
         if blocked:
             continue
+        v_next = corner_speed_at(tb, tb.corner_radius[nxt, lane, j], grip_next)
         # the next move arrives at no more than its bin's middle (or the corner speed below it): the fastest
         # arrival here is the one that can still brake down to that over the next section
         v_reach = v_next
         if v_next >= tb.bin_low[0]:
             k = min(int((v_next - tb.bin_low[0]) / bin_width), last_bin)
             v_reach = min(0.5 * (tb.bin_low[k] + tb.bin_high[k]), v_next)
-        entry = max(entry, math.sqrt(v_reach * v_reach + 2.0 * tb.brake * tb.distance[nxt, lane, j]))
-    return count, v_max, entry, 1
+        entry_sq = max(entry_sq, v_reach * v_reach + 2.0 * tb.brake * tb.distance[nxt, lane, j])
+    return count, v_max, math.sqrt(entry_sq), 1
 
 
 @njit(cache=True, inline="always")
@@ -207,7 +232,7 @@ def bin_arrival(
     return arrival, 1
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)
 def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int) -> tuple[int, int, int]:
     """(time after the move, new lane-change count, legal flag 0/1) of player ``p`` choosing ``lane``/``vbin``.
 
@@ -216,7 +241,8 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
     pruning is on) arriving within the collision window of a player who already reached that checkpoint this
     round, in its lane or on its other side (the paths cross).
     """
-    count, v_max, entry, ok = lane_gate(tb, state, p, lane)
+    grip_now, grip_next = mover_grip(tb, state, p)
+    count, v_max, entry, ok = lane_gate(tb, state, p, lane, grip_now, grip_next)
     if not ok:
         return 0, 0, 0
     arrival, ok = bin_arrival(tb, state, p, lane, vbin, v_max, entry)
@@ -225,55 +251,74 @@ def move_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int
     return arrival, count, 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def fastest_in_lane(
+    tb: GameTables, state: np.ndarray, p: int, lane: int, grip_now: float, grip_next: float
+) -> tuple[int, int, int]:
+    """(speed bin, arrival, new lane-change count) of the fastest legal move of player ``p`` into ``lane``
+    (bin -1 if there is none). A higher arrival speed never arrives later, so it is the first legal bin from
+    the top. ``grip_now``, ``grip_next``: the player's :func:`mover_grip`."""
+    count, v_max, entry, gate = lane_gate(tb, state, p, lane, grip_now, grip_next)
+    if gate:
+        for vbin in range(tb.bin_low.shape[0] - 1, -1, -1):
+            arrival, ok = bin_arrival(tb, state, p, lane, vbin, v_max, entry)
+            if ok:
+                return vbin, arrival, count
+    return -1, 0, 0
+
+
+@njit(cache=True, inline="always")
+def model_lane(tb: GameTables, state: np.ndarray, p: int) -> int:
+    """The racing line's lane at the next checkpoint of player ``p`` if it is modelled, else -1 (it plays
+    freely; so does a modelled player where the line gives no lane)."""
+    if state[p, MODELLED] == 0:
+        return -1
+    return tb.predicted_lane[(state[p, CHECKPOINT] + 1) % tb.straight.shape[0]]
+
+
+@njit(**NO_REFCOUNT)
 def allowed_lane(tb: GameTables, state: np.ndarray, p: int) -> int:
     """The only lane a modelled player may take at its next checkpoint (the racing line's lane there), or -1
     when it plays freely (not modelled, no line, or no legal move in that lane: then it avoids like anyone)."""
-    if state[p, MODELLED] == 0:
-        return -1
-    lane = tb.predicted_lane[(state[p, CHECKPOINT] + 1) % tb.straight.shape[0]]
+    lane = model_lane(tb, state, p)
     if lane < 0:
         return -1
-    _, v_max, entry, gate = lane_gate(tb, state, p, lane)
-    if not gate:
-        return -1
-    for vbin in range(tb.bin_low.shape[0]):
-        _, ok = bin_arrival(tb, state, p, lane, vbin, v_max, entry)
-        if ok:
-            return lane
-    return -1
+    grip_now, grip_next = mover_grip(tb, state, p)
+    vbin, _, _ = fastest_in_lane(tb, state, p, lane, grip_now, grip_next)
+    return lane if vbin >= 0 else -1
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)
 def legal_moves(tb: GameTables, state: np.ndarray, p: int, out: np.ndarray) -> int:
     """Write the legal actions (lane * bins + bin) of player ``p`` into ``out``; return how many.
 
     A modelled player has one move: the earliest arrival in its predicted lane (:func:`allowed_lane`)."""
     bins = tb.bin_low.shape[0]
     lanes = tb.distance.shape[1]
-    only = allowed_lane(tb, state, p)
+    grip_now, grip_next = mover_grip(tb, state, p)
     if state[p, MODELLED] != 0:
         # the model's line follower drives as fast as it legally can in its lane: one move
+        only = model_lane(tb, state, p)
+        if only >= 0:
+            vbin, _, _ = fastest_in_lane(tb, state, p, only, grip_now, grip_next)
+            if vbin >= 0:
+                out[0] = only * bins + vbin
+                return 1
+            # no legal move in the line's lane: the earliest arrival in any other lane
         best, best_arrival = -1, 1 << 60
         for lane in range(lanes):
-            if only >= 0 and lane != only:
+            if lane == only:
                 continue
-            _, v_max, entry, gate = lane_gate(tb, state, p, lane)
-            if not gate:
-                continue
-            for vbin in range(bins - 1, -1, -1):
-                arrival, ok = bin_arrival(tb, state, p, lane, vbin, v_max, entry)
-                if ok:
-                    if arrival < best_arrival:
-                        best, best_arrival = lane * bins + vbin, arrival
-                    break
+            vbin, arrival, _ = fastest_in_lane(tb, state, p, lane, grip_now, grip_next)
+            if vbin >= 0 and arrival < best_arrival:
+                best, best_arrival = lane * bins + vbin, arrival
         if best < 0:
             return 0
         out[0] = best
         return 1
     k = 0
     for lane in range(lanes):
-        _, v_max, entry, gate = lane_gate(tb, state, p, lane)
+        _, v_max, entry, gate = lane_gate(tb, state, p, lane, grip_now, grip_next)
         if not gate:
             continue
         for vbin in range(bins):
@@ -284,7 +329,7 @@ def legal_moves(tb: GameTables, state: np.ndarray, p: int, out: np.ndarray) -> i
     return k
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)
 def apply_move(tb: GameTables, state: np.ndarray, p: int, action: int) -> bool:
     """Play ``action`` for player ``p`` in place; False (state unchanged) if it is illegal."""
     bins = tb.bin_low.shape[0]
@@ -296,7 +341,7 @@ def apply_move(tb: GameTables, state: np.ndarray, p: int, action: int) -> bool:
     return True
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)
 def apply_outcome(tb: GameTables, state: np.ndarray, p: int, lane: int, vbin: int, arrival: int, count: int) -> None:
     """Play the legal move ``lane``/``vbin`` of player ``p`` whose :func:`move_outcome` (``arrival``,
     ``count``) the caller already has, in place."""

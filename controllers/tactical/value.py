@@ -13,11 +13,12 @@ from numba import njit
 
 from controllers.tactical.game import GameTables
 from controllers.tactical.rules import TIME
+from sim_core.kernel_arrays import NO_REFCOUNT
 
 RACE_SHARE = 0.8  # share of the value range given to the time advantage over the others (the rest: own pace)
 
 
-@njit(cache=True)
+@njit(**NO_REFCOUNT)
 def terminal_values(tb: GameTables, state: np.ndarray, reference: np.ndarray, out: np.ndarray) -> None:
     """Value in [0, 1] of a finished game for every player.
 

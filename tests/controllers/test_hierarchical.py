@@ -162,3 +162,29 @@ def test_a_kart_alongside_that_drifts_away_leaves_the_plan_alone() -> None:
         ego = replace(observation.me, speed=6.0)
         out = planner._no_squeeze(plan, me, (ego, other))
         assert (out.ego_waypoints[0].lane == me.lane) == squeezed, heading_off
+
+
+def test_a_leader_clear_of_the_kart_behind_may_cross_in_front_of_it() -> None:
+    """The lane is held against a kart ahead within the collision distance, or behind with its body still
+    overlapping the ego's; a kart behind by more than a body length keeps its distance (the follower's duty),
+    so the leader may take its line across it (holding the lane there lost 9 of 25 lane-2 starts on
+    complex-reversed in the session-7 series)."""
+    track = get_track("oval-reversed")
+    world = World(track, 1, 2, SimParams(kart=PAPER_KART))
+    world.reset(start_lanes=(2, 3))
+    observation = observe(world, 0)[0]
+    planner = MCTSPlanner()
+    planner.reset(RaceContext(track, PAPER_KART, 0, 2, track.lane_change_limit, 0))
+    me = planner.present_state(observation.me, 0.0, 0)
+    first = track.lane_point(me.checkpoint + 1, 3)
+    across = Waypoint(me.checkpoint + 1, 3, (float(first[0]), float(first[1])), 12.0, 1.0)
+    plan = Plan(0, me.checkpoint, {0: (across,), 1: ()}, 1, 1, 0.0)
+    mover = observation.karts[1]
+    _, tangent = track.point_at(mover.progress)
+    along = math.atan2(float(tangent[1]), float(tangent[0]))
+    body_length = 2.0 * (PAPER_KART.body_half_length + PAPER_KART.body_radius)
+    ego = replace(observation.me, speed=6.0)
+    for gap, squeezed in ((2.5, True), (0.0, True), (-0.8 * body_length, True), (-1.2 * body_length, False)):
+        other = replace(mover, speed=6.0, heading=along, progress=mover.progress + gap)
+        out = planner._no_squeeze(plan, me, (ego, other))
+        assert (out.ego_waypoints[0].lane == me.lane) == squeezed, gap
