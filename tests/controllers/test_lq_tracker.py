@@ -1,0 +1,55 @@
+"""The LQNG tracker's steering rate limit: in a real duel the tactical driver's steer input never changes
+faster than its preset's rate, while the same duel without the limit does (so the limit is what holds it)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from controllers.base import Action, RaceContext
+from controllers.hierarchical import HierarchicalController
+from controllers.lq.tracker import MCTS_TRACKING, LQNGTracker
+from controllers.plan import Plan
+from controllers.race import RaceSpec, run_race
+from controllers.registry import make_controller
+from sim_core.observation import Observation
+from sim_core.params import DT
+
+
+class RecordingTracker:
+    """An LQNG tracker that keeps every steer input it returns."""
+
+    def __init__(self, inner: LQNGTracker) -> None:
+        self.inner = inner
+        self.steers: list[float] = []
+
+    def reset(self, context: RaceContext) -> None:
+        self.inner.reset(context)
+
+    def act(self, observation: Observation, plan: Plan | None) -> Action:
+        action = self.inner.act(observation, plan)
+        self.steers.append(action.steer)
+        return action
+
+
+def _steer_rates(steer_rate: float) -> np.ndarray:
+    """Steer input changes per second of mcts-lqng over the first 10 s of a complex duel (seed 0, lane 2)."""
+    driver = make_controller("mcts-lqng")
+    assert isinstance(driver, HierarchicalController) and isinstance(driver.tracker, LQNGTracker)
+    recorder = RecordingTracker(LQNGTracker(replace(driver.tracker.params, steer_rate=steer_rate)))
+    driver.tracker = recorder
+    spec = RaceSpec(
+        track="complex", controllers=("mcts-lqng", "fixed-lqng"), seed=0, start_lanes=(2, 3), time_limit=10.0
+    )
+    run_race(spec, drivers=[driver, make_controller("fixed-lqng")])
+    assert len(recorder.steers) >= 400
+    return np.abs(np.diff(recorder.steers)) / DT
+
+
+def test_the_tactical_tracker_rate_limits_its_steering_in_traffic() -> None:
+    assert MCTS_TRACKING.steer_rate > 0.0
+    limited = _steer_rates(MCTS_TRACKING.steer_rate)
+    assert limited.max() <= MCTS_TRACKING.steer_rate + 1e-9
+    unlimited = _steer_rates(0.0)
+    assert unlimited.max() > MCTS_TRACKING.steer_rate
