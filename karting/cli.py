@@ -239,7 +239,10 @@ def train(
         float, typer.Option(help="near-wall spawns turned toward the wall by up to this (spec: 0)")
     ] = 0.0,
     fine_tune_from: Annotated[
-        Path | None, typer.Option(help="start from this trained folder (fresh step count and schedule)")
+        Path | None,
+        typer.Option(
+            help="start from this trained folder, or a shipped agent's (its actor, fresh critic); fresh step count"
+        ),
     ] = None,
     as_json: JsonOption = False,
 ) -> None:

@@ -27,9 +27,13 @@ from stable_baselines3.common.vec_env import VecNormalize
 from controllers.rl.batch import RaceBatch
 from controllers.rl.config import EnvConfig, PPOConfig
 from controllers.rl.curves import LOG_FIELDS, plot_curves
+from controllers.rl.policy import POLICY_FILE
 from controllers.rl.selfplay import OpponentPool, SelfPlayVecEnv
 
 MODEL, NORMALISER, LOG, CURVES = "model.zip", "vecnormalize.pkl", "training_log.csv", "curves.png"
+# observations behind a shipped agent's statistics: weight enough that fine-tuning moves them slowly (its count
+# is not shipped)
+SHIPPED_STATISTICS_COUNT = 1e6
 
 
 @dataclass
@@ -111,6 +115,34 @@ def save(model: BaseAlgorithm, norm: VecNormalize, folder: Path) -> None:
     norm.save(str(folder / NORMALISER))
 
 
+def load_actor(model: PPO, venv: VecNormalize, folder: Path) -> None:
+    """Copy the actor (hidden layers, action head, log std) and the observation statistics of ``folder``'s
+    ``policy.npz`` (what :func:`controllers.rl.policy.export_policy` ships) into a fresh ``model`` and ``venv``.
+    The critic stays fresh: the shipped agents keep no value network."""
+    with np.load(folder / POLICY_FILE, allow_pickle=False) as data:
+        n = int(data["n_layers"])
+        state = model.policy.state_dict()
+        layers = sorted(
+            {int(k.split(".")[2]) for k in state if k.startswith("mlp_extractor.policy_net.") and k.endswith("weight")}
+        )
+        names = [f"mlp_extractor.policy_net.{i}" for i in layers] + ["action_net"]
+        if len(names) != n:
+            raise ValueError(f"{folder / POLICY_FILE} has {n} layers, the model {len(names)}")
+        for i, name in enumerate(names):
+            for part, key in (("weight", f"w{i}"), ("bias", f"b{i}")):
+                if state[f"{name}.{part}"].shape != data[key].shape:
+                    raise ValueError(f"{key} of {folder / POLICY_FILE} does not fit the model's {name}.{part}")
+                state[f"{name}.{part}"] = torch.as_tensor(data[key], dtype=state[f"{name}.{part}"].dtype)
+        state["log_std"] = torch.as_tensor(data["log_std"], dtype=state["log_std"].dtype)
+        model.policy.load_state_dict(state)
+        statistics = venv.obs_rms
+        assert isinstance(statistics, RunningMeanStd), "a flat (Box) observation space"
+        statistics.mean = np.asarray(data["obs_mean"], dtype=np.float64).copy()
+        statistics.var = np.asarray(data["obs_var"], dtype=np.float64).copy()
+        statistics.count = SHIPPED_STATISTICS_COUNT
+        venv.clip_obs = float(data["clip_obs"])
+
+
 def make_model(venv: VecNormalize, ppo: PPOConfig) -> PPO:
     """A fresh PPO with the spec's settings."""
     n_steps = max(ppo.buffer_size // venv.num_envs, 1)
@@ -160,7 +192,13 @@ def train(
     raw.seed(ppo.seed)
     resuming = resume and (out / MODEL).exists()
     source = out if resuming else fine_tune_from
-    if source is not None:
+    if source is not None and not (source / MODEL).exists() and (source / POLICY_FILE).exists():
+        # a shipped agent (inference files only): its actor and observation statistics, a fresh critic
+        (out / LOG).unlink(missing_ok=True)
+        venv = VecNormalize(raw, norm_obs=True, norm_reward=ppo.normalise_reward, clip_obs=10.0, gamma=ppo.gamma)
+        model = make_model(venv, ppo)
+        load_actor(model, venv, source)
+    elif source is not None:
         venv = VecNormalize.load(str(source / NORMALISER), raw)
         venv.training = True
         schedule = LinearSchedule(ppo.learning_rate, 0.0, 1.0)

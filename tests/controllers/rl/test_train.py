@@ -44,3 +44,28 @@ def test_smoke_training_beats_a_random_policy(tmp_path: Path) -> None:
         VecNormalize.load(str(tmp_path / "tuned" / NORMALISER), SelfPlayVecEnv(RaceBatch(env, 32), pool)).obs_rms.count
         > base
     )
+
+
+def test_a_shipped_agent_fine_tunes_from_its_inference_files(tmp_path: Path) -> None:
+    """The shipped folders hold the actor only (policy.npz): fine-tuning starts from exactly that policy."""
+    import torch
+
+    from controllers.rl.policy import load_policy
+    from controllers.rl.train import load_actor, make_model
+
+    shipped = Path("controllers/rl/weights/e2e")
+    env = make_config("e2e", tracks=("train-oval-small",))
+    ppo = PPOConfig(total_steps=4096, n_races=32, buffer_size=2048, batch_size=256, save_steps=2048, swap_steps=1024)
+    venv = VecNormalize(SelfPlayVecEnv(RaceBatch(env, 32), OpponentPool(1, 1.0, 0)), norm_obs=True, clip_obs=10.0)
+    model = make_model(venv, ppo)
+    load_actor(model, venv, shipped)
+    policy = load_policy(shipped)
+    obs = venv.reset()
+    raw = venv.get_original_obs()[:4]
+    with torch.no_grad():
+        mean = model.policy.get_distribution(torch.as_tensor(venv.normalize_obs(raw))).distribution.mean.numpy()
+    expected = np.stack([policy.mean(o) for o in raw])
+    # float32 torch against the float64 inference path: equal to about 1e-4
+    assert obs.shape[0] == 32 and np.allclose(mean, expected, atol=1e-3), (mean, expected)
+    tuned = train(env, ppo, tmp_path / "tuned", fine_tune_from=shipped)
+    assert tuned.timesteps >= 4096 and (tmp_path / "tuned" / MODEL).exists()
