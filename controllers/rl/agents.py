@@ -4,6 +4,8 @@
   the RL tracker (:class:`~controllers.rl.tracker.RLTracker`), which targets the plan's lanes and speeds;
 * ``fixed-rl``: the fixed racing-line planner (:class:`~controllers.fixed_line.FixedLinePlanner`) with the RL
   tracker targeting its lanes at top speed;
+  both brake when over the racing line's speed profile plus 1 m/s (:mod:`controllers.rl.shield`, a public
+  parameter: ``line_speed_shield``);
 * ``e2e``: the RL policy alone (checkpoint centres as targets), a plain :class:`~controllers.base.Controller`.
   The paper ran a background MCTS for E2E's delta-r / delta-v metrics only; it is left out here.
 
@@ -32,6 +34,12 @@ from sim_core.observation import Observation
 RL_RATE_HZ = 50.0  # called every step; the tracker itself decides at 25 Hz and holds its action
 
 
+SPEED_CEILING_HELP = (
+    "brake when over the racing line's speed profile by more than this (the LQNG tracker's ceiling); "
+    "0 m/s: exactly the profile (ours, not the paper's: controllers.rl.shield)"
+)
+SHIELD_HELP = "never faster than the racing line's speed profile plus the margin (ours, not the paper's)"
+
 STALL_RECOVERY_HELP = (
     "after 0.5 s stalled, drive off (or back off a wall) for 1 s; the policy never reverses (ours, not the paper's)"
 )
@@ -48,6 +56,8 @@ class MCTSRLParams:
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
     stall_recovery: bool = parameter(True, STALL_RECOVERY_HELP)
+    line_speed_shield: bool = parameter(True, SHIELD_HELP)
+    speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
 
 
 @dataclass(frozen=True)
@@ -61,6 +71,8 @@ class FixedRLParams:
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
     stall_recovery: bool = parameter(True, STALL_RECOVERY_HELP)
+    line_speed_shield: bool = parameter(True, SHIELD_HELP)
+    speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
 
 
 @dataclass(frozen=True)
@@ -71,6 +83,10 @@ class E2EParams:
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
     stall_recovery: bool = parameter(True, STALL_RECOVERY_HELP)
+    line_speed_shield: bool = parameter(
+        False, SHIELD_HELP + ": the racing line is a planner's, which the end-to-end agent has not"
+    )
+    speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
 
 
 def build_mcts_rl(params: MCTSRLParams) -> Controller:
@@ -81,7 +97,12 @@ def build_mcts_rl(params: MCTSRLParams) -> Controller:
     return HierarchicalController(
         "mcts-rl",
         planner,
-        RLTracker("mcts-rl", deterministic=params.deterministic, stall_recovery=params.stall_recovery),
+        RLTracker(
+            "mcts-rl",
+            deterministic=params.deterministic,
+            stall_recovery=params.stall_recovery,
+            speed_ceiling_margin=params.speed_ceiling_margin_mps if params.line_speed_shield else None,
+        ),
         rate_hz=RL_RATE_HZ,
     )
 
@@ -92,7 +113,13 @@ def build_fixed_rl(params: FixedRLParams) -> Controller:
     return HierarchicalController(
         "fixed-rl",
         planner,
-        RLTracker("fixed-rl", deterministic=params.deterministic, stall_recovery=params.stall_recovery),
+        RLTracker(
+            "fixed-rl",
+            deterministic=params.deterministic,
+            stall_recovery=params.stall_recovery,
+            speed_ceiling_margin=params.speed_ceiling_margin_mps if params.line_speed_shield else None,
+            line_margin=params.line_margin_m,
+        ),
         rate_hz=RL_RATE_HZ,
     )
 
@@ -103,8 +130,14 @@ class E2EController:
     name = "e2e"
     rate_hz = RL_RATE_HZ
 
-    def __init__(self, folder: str | None = None, deterministic: bool = True, stall_recovery: bool = False) -> None:
-        self.tracker = RLTracker("e2e", folder, deterministic, stall_recovery)
+    def __init__(
+        self,
+        folder: str | None = None,
+        deterministic: bool = True,
+        stall_recovery: bool = False,
+        speed_ceiling_margin: float | None = None,
+    ) -> None:
+        self.tracker = RLTracker("e2e", folder, deterministic, stall_recovery, speed_ceiling_margin)
 
     def reset(self, context: RaceContext) -> None:
         """Load the weights and start a race."""
@@ -117,4 +150,8 @@ class E2EController:
 
 def build_e2e(params: E2EParams) -> Controller:
     """The end-to-end agent."""
-    return E2EController(deterministic=params.deterministic, stall_recovery=params.stall_recovery)
+    return E2EController(
+        deterministic=params.deterministic,
+        stall_recovery=params.stall_recovery,
+        speed_ceiling_margin=params.speed_ceiling_margin_mps if params.line_speed_shield else None,
+    )

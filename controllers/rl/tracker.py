@@ -27,11 +27,13 @@ import numpy as np
 
 from controllers.base import Action, RaceContext
 from controllers.plan import Plan
+from controllers.racing_line import optimise_racing_line
 from controllers.rl.actions import ACCELERATE, world_actions
 from controllers.rl.config import DECISION_STEPS, EPISODE_STEPS, STACK, AgentKind
 from controllers.rl.observations import TrackTables, build_frame, frame_size
 from controllers.rl.policy import Policy, load_policy, weights_folder
 from controllers.rl.recovery import StallRecovery
+from controllers.rl.shield import LineSpeedShield
 from controllers.rl.spawns import racing_lane_at_checkpoints
 from sim_core import state as st
 from sim_core.observation import Observation
@@ -65,6 +67,10 @@ class RLTracker:
     Fixed-RL the plan's lanes at top speed, E2E the checkpoint centres at top speed. Checkpoints a plan does
     not cover fall back to the racing lane (planned agents) or the centre (E2E).
 
+    With ``speed_ceiling_margin`` set, a :class:`~controllers.rl.shield.LineSpeedShield` brakes whenever the kart
+    is over the racing line's speed profile by more than that margin [m/s] (``line_margin``: the line's margin
+    inside the walls, as the planner's).
+
     By default (``deterministic``) it decides by the policy's Gaussian: the mean steer and the pedal branch the
     Gaussian most likely picks (:meth:`controllers.rl.policy.Policy.act`). Otherwise it samples the Gaussian, as
     PPO's rollouts do, with a generator seeded by the race (``context.seed``, ``context.ego``), so a seeded race
@@ -72,10 +78,19 @@ class RLTracker:
     """
 
     def __init__(
-        self, agent: AgentKind, folder: str | None = None, deterministic: bool = True, stall_recovery: bool = False
+        self,
+        agent: AgentKind,
+        folder: str | None = None,
+        deterministic: bool = True,
+        stall_recovery: bool = False,
+        speed_ceiling_margin: float | None = None,
+        line_margin: float = 1.0,
     ) -> None:
         self.agent = agent
         self.recovery: StallRecovery | None = StallRecovery() if stall_recovery else None
+        self.speed_ceiling_margin = speed_ceiling_margin
+        self.line_margin = line_margin
+        self.shield: LineSpeedShield | None = None
         self.folder = folder
         self.deterministic = deterministic
         self.rng = np.random.default_rng(0)
@@ -91,6 +106,10 @@ class RLTracker:
         if self.recovery is not None:
             self.recovery.reset()
         track, n = context.track, context.n_karts
+        self.shield = None
+        if self.speed_ceiling_margin is not None:
+            line = optimise_racing_line(track, context.kart, margin=self.line_margin)
+            self.shield = LineSpeedShield(line, context.kart.as_array(), self.speed_ceiling_margin)
         sizes = {STACK * frame_size(m): m for m in range(1, 9)}
         if self.policy.obs_size not in sizes:
             raise ValueError(f"{self.agent} weights take {self.policy.obs_size} floats: no race size gives that")
@@ -140,6 +159,8 @@ class RLTracker:
         inputs, branch = world_actions(self.kart, np.array([me.speed]), raw[None, :])
         self.accelerating[0, 0] = float(branch[0] == ACCELERATE)
         self.action = Action(float(np.clip(inputs[0, 0], -1, 1)), float(np.clip(inputs[0, 1], -1, 1)))
+        if self.shield is not None:
+            self.action = self.shield.limit(self.action, me.speed, me.progress)
         if self.recovery is not None:
             _, tangent = self._ctx.track.point_at(me.progress)
             error = math.remainder(math.atan2(tangent[1], tangent[0]) - me.heading, math.tau)
