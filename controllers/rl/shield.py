@@ -18,21 +18,42 @@ import numpy as np
 from controllers.base import Action
 from controllers.racing_line import RacingLine
 from sim_core.kart import throttle_for_acceleration
+from sim_core.params import KartParams
 
 
 @dataclass(frozen=True)
 class LineSpeedShield:
-    """Brake toward ``line`` speed profile plus ``margin`` when over it (deceleration ``gain`` per m/s over,
-    saturating at the kart's braking limit)."""
+    """Brake toward the ceiling when over it (deceleration ``gain`` per m/s over, saturating at the kart's
+    braking limit). The ceiling (:meth:`of`) is the racing line's speed profile plus a margin, with braking zones
+    that begin earlier than the line's own: the kart's path is not the line's, so the distance it has left to
+    brake is judged along the centre line at a fraction of its braking limit."""
 
-    line: RacingLine
+    s: np.ndarray  # (M + 1,) [m] centre-line progress of the samples, the first repeated one lap on
+    ceiling_speed: np.ndarray  # (M + 1,) [m/s]
     kart: np.ndarray  # the kart's packed parameters (sim_core.kart)
-    margin: float = 1.0  # [m/s] the policy's own line is not the racing line: a little slack
-    gain: float = 3.0  # [1/s]
+    gain: float = 10.0  # [1/s]
+
+    @classmethod
+    def of(
+        cls, line: RacingLine, kart: KartParams, margin: float = 1.0, braking_use: float = 0.7, gain: float = 10.0
+    ) -> LineSpeedShield:
+        """The shield of ``line`` for ``kart``: the profile plus ``margin`` [m/s], and no faster than braking at
+        ``braking_use`` of the kart's limit lets it reach that anywhere ahead (a backward pass, twice round the
+        closed line)."""
+        length = float(line.s[-1] + (line.s[1] - line.s[0]))
+        ds = np.diff(np.append(line.s, line.s[0] + length))
+        ceiling = np.asarray(line.speed, dtype=np.float64) + margin
+        decel = braking_use * kart.braking
+        m = len(ceiling)
+        for _ in range(2):
+            for i in range(m - 1, -1, -1):
+                j = (i + 1) % m
+                ceiling[i] = min(ceiling[i], np.sqrt(ceiling[j] ** 2 + 2.0 * decel * ds[i]))
+        return cls(np.append(line.s, line.s[0] + length), np.append(ceiling, ceiling[0]), kart.as_array(), gain)
 
     def ceiling(self, progress: float) -> float:
         """Highest allowed speed [m/s] at ``progress`` [m] along the centre line."""
-        return float(self.line.speed_at(progress)) + self.margin
+        return float(np.interp(progress % self.s[-1], self.s, self.ceiling_speed))
 
     def limit(self, action: Action, speed: float, progress: float) -> Action:
         """``action`` with its pedal lowered to a brake when ``speed`` is over the ceiling at ``progress``."""

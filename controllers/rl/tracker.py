@@ -109,7 +109,7 @@ class RLTracker:
         self.shield = None
         if self.speed_ceiling_margin is not None:
             line = optimise_racing_line(track, context.kart, margin=self.line_margin)
-            self.shield = LineSpeedShield(line, context.kart.as_array(), self.speed_ceiling_margin)
+            self.shield = LineSpeedShield.of(line, context.kart, self.speed_ceiling_margin)
         sizes = {STACK * frame_size(m): m for m in range(1, 9)}
         if self.policy.obs_size not in sizes:
             raise ValueError(f"{self.agent} weights take {self.policy.obs_size} floats: no race size gives that")
