@@ -108,7 +108,7 @@ def main(
                 if kart.finish_time is not None:
                     stats["time"].append(kart.finish_time)
             figures = [
-                f"{names[k]} {kart.finish_time or float('nan'):.2f}s "
+                f"{names[k]} {'DNF' if kart.finish_time is None else f'{kart.finish_time:.2f}s'} "
                 f"f{kart.collisions_at_fault} "
                 f"i{kart.illegal_lane_changes_per_step}/{kart.illegal_lane_changes_checkpoint} "
                 f"p{kart.passes}"
