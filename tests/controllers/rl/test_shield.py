@@ -82,6 +82,9 @@ def _worst_excess(shielded: bool) -> float:
 
 def test_in_a_race_the_shield_holds_the_kart_near_its_ceiling_where_the_policy_alone_does_not() -> None:
     """The shipped mcts-rl policy enters complex's corners over the ceiling by metres per second; shielded it
-    stays within the proportional brake's lag (about 0.5 m/s) and one held decision."""
+    stays within the proportional brake's lag (0.7 x 6 m/s^2 / 10 per s, about 0.4 m/s) and one held decision,
+    except on the inside of a hairpin, where the centre-line progress the ceiling is indexed by runs up to twice
+    as fast as the kart and the ceiling falls faster than full braking can follow: up to about 1 m/s there (the
+    shield then holds full brake)."""
     assert _worst_excess(shielded=False) > 3.0
-    assert _worst_excess(shielded=True) < 1.0
+    assert _worst_excess(shielded=True) < 1.5
