@@ -238,6 +238,14 @@ def train(
     near_wall_heading_deg: Annotated[
         float, typer.Option(help="near-wall spawns turned toward the wall by up to this (spec: 0)")
     ] = 0.0,
+    solo_spawns: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            max=1.0,
+            help="probability a training race has no opponent racing (finished phantoms; ours, spec: 0)",
+        ),
+    ] = 0.0,
     fine_tune_from: Annotated[
         Path | None,
         typer.Option(
@@ -271,7 +279,7 @@ def train(
         env = replace(env, weights=replace(env.weights, wall_hit=wall_hit_penalty))
     if near_wall_spawns is not None:
         env = replace(env, near_wall_probability=near_wall_spawns)
-    env = replace(env, near_wall_heading=math.radians(near_wall_heading_deg))
+    env = replace(env, near_wall_heading=math.radians(near_wall_heading_deg), solo_probability=solo_spawns)
     result = run_training(env, ppo, folder, resume=resume, progress_bar=not as_json, fine_tune_from=fine_tune_from)
     if as_json:
         print_json(

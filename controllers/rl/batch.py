@@ -14,7 +14,14 @@ import numpy as np
 from controllers.rl import rewards as rw
 from controllers.rl.actions import ACCELERATE, world_actions
 from controllers.rl.config import DECISION_STEPS, STACK, EnvConfig
-from controllers.rl.observations import TrackTables, build_frame, frame_size, target_indices, target_points
+from controllers.rl.observations import (
+    TrackTables,
+    build_frame,
+    frame_size,
+    place_phantoms,
+    target_indices,
+    target_points,
+)
 from controllers.rl.spawns import random_plan, spawn_race
 from sim_core import state as st
 from sim_core.params import DT, RuleParams, SimParams, kart_preset
@@ -37,6 +44,7 @@ class Block:
     since: np.ndarray  # (b, K) [m] from the last checkpoint passed, at the last decision
     accelerating: np.ndarray  # (b, K) 1.0 while on the accelerator
     stack: np.ndarray  # (b, K, STACK, frame)
+    absent: np.ndarray  # (b, K) bool: shown as finished phantoms behind kart 0 (EnvConfig.solo_probability)
     offset: int = 0  # index of this block's first race in the batch
     terms: dict[str, np.ndarray] = field(default_factory=dict)
 
@@ -103,6 +111,7 @@ class RaceBatch:
             since=np.zeros((count, k)),
             accelerating=np.zeros((count, k)),
             stack=np.zeros((count, k, STACK, self.frame)),
+            absent=np.zeros((count, k), dtype=bool),
             offset=offset,
         )
 
@@ -120,6 +129,10 @@ class RaceBatch:
         w = block.world
         for b in races:
             cps = spawn_race(w, int(b), self.config, self.rng)
+            block.absent[b] = False
+            # (no draw when off: older seeded runs replay)
+            if self.config.solo_probability > 0.0 and self.rng.random() < self.config.solo_probability:
+                block.absent[b, 1:] = True
             for k in range(self.n_karts):
                 block.plan_lane[b, k], block.plan_speed[b, k] = random_plan(
                     self.config, w.track, self.kart.top_speed, self.rng
@@ -131,6 +144,7 @@ class RaceBatch:
             for c in range(behind + 1, lead + 1):
                 block.reach_count[b, c + 1] = 1
                 block.first_time[b, c + 1] = -self.rng.uniform(0.0, self.config.max_behind_time)
+        place_phantoms(w.fstate, w.istate, block.absent)
         self._sense(block, races)
         f, i = w.fstate[races], w.istate[races]
         block.passed[races] = i[:, :, st.I_CP_PASSED]
@@ -196,6 +210,9 @@ class RaceBatch:
         inputs, branch = world_actions(self.kart, f[:, :, st.F_SPEED], actions)
         block.accelerating = (branch == ACCELERATE).astype(float)
         w.step(inputs, n_steps=DECISION_STEPS)
+        if block.absent.any():
+            place_phantoms(f, i, block.absent)
+            block.accelerating[block.absent] = 0.0
         reward = self._step_terms(block, active) + self._checkpoint_terms(block, active)
         finished = active & (i[:, :, st.I_FINISHED] == 1)
         return reward, finished

@@ -92,6 +92,10 @@ class EnvConfig:
     # [rad] near-wall spawns turned toward the wall by up to this (0: along the track, as the original). Ours:
     # agents that stopped nose to the wall in complex's hairpins had never been there in training
     near_wall_heading: float = 0.0
+    # probability that a race's other karts are absent (finished phantoms 30 m behind the learner, as the race-time
+    # tracker shows a missing opponent). Ours: the original always trained with every kart racing, and a solo
+    # race (or one after the opponent finished) was then outside what the policies had seen
+    solo_probability: float = 0.0
     spawn_ahead: tuple[float, float] = (1.0, 4.0)  # [m] past the checkpoint
     max_behind_time: float = 1.0  # [s] random earlier crossing times of the kart behind
     mcts_speed_sigma: float = 1.5  # [m/s] MCTS random plans: 15 - |N(0, 1.5)|

@@ -31,6 +31,25 @@ TARGET_FEATURES = 5
 N_RAYS = 9
 
 
+PHANTOM_GAP = 30.0  # [m] behind the ego: where an absent opponent is shown
+
+
+def place_phantoms(fstate: np.ndarray, istate: np.ndarray, absent: np.ndarray) -> None:
+    """Show the absent karts of each race (``absent``: (R, K) bool, never kart 0) as phantoms, in place: a
+    copy of kart 0 (the ego) ``PHANTOM_GAP`` metres behind it along its heading, finished (inactive). The
+    race-time tracker shows a missing opponent (a solo race) this way, and training races with absent
+    opponents (``EnvConfig.solo_probability``) show them the same, so the policy has seen what it will see."""
+    races, slots = np.nonzero(absent)
+    if races.size == 0:
+        return
+    ego_f, ego_i = fstate[races, 0], istate[races, 0]
+    fstate[races, slots] = ego_f
+    fstate[races, slots, st.F_X] = ego_f[:, st.F_X] - PHANTOM_GAP * np.cos(ego_f[:, st.F_HEADING])
+    fstate[races, slots, st.F_Y] = ego_f[:, st.F_Y] - PHANTOM_GAP * np.sin(ego_f[:, st.F_HEADING])
+    istate[races, slots] = ego_i
+    istate[races, slots, st.I_FINISHED] = 1
+
+
 def frame_size(n_karts: int) -> int:
     """Floats in one frame for races of ``n_karts`` karts (55 for two)."""
     return OWN_FEATURES + OPPONENT_FEATURES * (n_karts - 1) + TARGET_FEATURES * HORIZON + N_RAYS

@@ -30,7 +30,7 @@ from controllers.plan import Plan
 from controllers.racing_line import optimise_racing_line
 from controllers.rl.actions import ACCELERATE, world_actions
 from controllers.rl.config import DECISION_STEPS, EPISODE_STEPS, STACK, AgentKind
-from controllers.rl.observations import TrackTables, build_frame, frame_size
+from controllers.rl.observations import TrackTables, build_frame, frame_size, place_phantoms
 from controllers.rl.policy import Policy, load_policy, weights_folder
 from controllers.rl.recovery import StallRecovery
 from controllers.rl.shield import LineSpeedShield
@@ -44,7 +44,6 @@ from sim_core.world import World
 
 DECISION_PERIOD = DECISION_STEPS * DT  # [s] 0.04: 25 Hz
 LAP_TIME_SCALE = EPISODE_STEPS * DT  # [s] T of the time feature
-PHANTOM_GAP = 30.0  # [m] behind the ego: where a solo race puts the absent opponent
 HYSTERESIS = RuleParams().lane_hysteresis  # [m] the referee's lane membership
 
 
@@ -196,14 +195,11 @@ class RLTracker:
             self.last_speed[view.index] = view.speed
         others = sorted(observation.others(), key=lambda v: (v.x - me.x) ** 2 + (v.y - me.y) ** 2)
         f, i = self.snap.fstate[0], self.snap.istate[0]
+        absent = np.zeros((1, self.snap.fstate.shape[1]), dtype=bool)
         for slot in range(self.snap.fstate.shape[1]):
             seen = me if slot == 0 else (others[slot - 1] if slot - 1 < len(others) else None)
-            if seen is None:  # a phantom: a finished kart behind the ego
-                f[slot] = f[0]
-                f[slot, st.F_X] -= PHANTOM_GAP * np.cos(me.heading)
-                f[slot, st.F_Y] -= PHANTOM_GAP * np.sin(me.heading)
-                i[slot] = i[0]
-                i[slot, st.I_FINISHED] = 1
+            if seen is None:  # a phantom (placed below, once the ego's slot is filled)
+                absent[0, slot] = True
                 self.accelerating[0, slot] = 0.0
                 continue
             k = seen.index
@@ -214,6 +210,7 @@ class RLTracker:
             i[slot, st.I_LANE_NOW], i[slot, st.I_STEP_LANE_COUNT] = self.lane_now[k], self.lane_count[k]
             if slot:
                 self.accelerating[0, slot] = self.opp_accelerating[k]
+        place_phantoms(self.snap.fstate, self.snap.istate, absent)
         self.snap.ray_dist[0, 0] = observation.ray_distances
 
     def _update_lane(self, k: int, s: float, d: float, passed: int, crossing_lane: int) -> None:

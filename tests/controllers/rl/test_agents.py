@@ -17,7 +17,7 @@ from controllers.registry import controller_factory, controller_spec
 from controllers.rl.actions import world_actions
 from controllers.rl.batch import RaceBatch
 from controllers.rl.config import AGENT_KINDS, EnvConfig
-from controllers.rl.observations import OWN_FEATURES, TrackTables, build_frame
+from controllers.rl.observations import OWN_FEATURES, TrackTables, build_frame, place_phantoms
 from controllers.rl.policy import MissingWeightsError, load_policy, weights_folder
 from controllers.rl.tracker import RLTracker
 from sim_core import state as st
@@ -141,3 +141,30 @@ def test_swerving_on_a_straight_costs_the_swerve_penalty_per_referee_count() -> 
         total += rise
     assert total >= 1
     assert track.straight_flags[int(w.istate[0, 0, st.I_CP_PASSED]) % track.n_checkpoints]
+
+
+def test_a_solo_race_is_observed_as_a_solo_training_race() -> None:
+    """Alone, the tracker shows the missing opponent as a finished phantom behind the ego; a training race with
+    its opponent absent (``EnvConfig.solo_probability``) shows it the same way: the frames are equal."""
+    track = get_track("oval")
+    solo = World(track, 1, 1, SimParams())
+    solo.reset(start_lanes=(2,))
+    pair = World(track, 1, 2, SimParams())
+    pair.reset(start_lanes=(2, 3))
+    absent = np.array([[False, True]])
+    place_phantoms(pair.fstate, pair.istate, absent)
+    pair.sense(np.array([0]))  # as a training spawn does: the rays no longer see the absent kart
+    tracker = RLTracker("e2e")
+    tracker.reset(RaceContext(track, solo.params.kart, 0, 1, solo.lane_change_limit, seed=0))
+    tables = TrackTables.of(track)
+    n = track.n_checkpoints
+    for step in range(150):
+        live = tracker.frame(observe(solo, 0)[0], None)
+        acc = tracker.accelerating.copy()
+        ref = build_frame(pair, tables, np.zeros((1, 2, n), np.int64), np.full((1, 2, n), 15.0), acc, pair.time / 30)
+        np.testing.assert_allclose(live, ref[0, 0], atol=1e-9, err_msg=str(step))
+        raw = np.array([[0.6 * np.sin(step / 15), 1.0]])
+        inputs, _ = world_actions(solo.params.kart, solo.fstate[0, :, st.F_SPEED], raw)
+        solo.step(inputs[None], n_steps=2)
+        pair.step(np.concatenate([inputs, np.zeros((1, 2))])[None], n_steps=2)
+        place_phantoms(pair.fstate, pair.istate, absent)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import gymnasium as gym
 import numpy as np
 from gymnasium.utils.env_checker import check_env
@@ -9,6 +11,8 @@ from pettingzoo.test import parallel_api_test
 
 from controllers.rl.batch import RaceBatch
 from controllers.rl.envs import KartRaceEnv, KartRaceVectorEnv, make_config, parallel_env
+from controllers.rl.observations import PHANTOM_GAP
+from sim_core import state as st
 
 
 def test_gymnasium_check_env() -> None:
@@ -61,3 +65,22 @@ def test_seeded_batch_is_deterministic() -> None:
     obs_b, ret_b = run()
     assert np.array_equal(obs_a, obs_b) and np.array_equal(ret_a, ret_b)
     assert obs_a.shape == (8, 2, 220)
+
+
+def test_solo_training_races_show_their_opponents_as_phantoms_behind_the_learner() -> None:
+    """With ``solo_probability`` 1 every race's other kart is a finished phantom 30 m behind kart 0, at the spawn
+    and after every decision; with the default 0 nobody is absent."""
+    batch = RaceBatch(replace(make_config("fixed-rl"), solo_probability=1.0), 6, seed=3)
+    batch.reset(3)
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        for block in batch.blocks:
+            f, i = block.world.fstate, block.world.istate
+            assert block.absent[:, 1].all() and not block.absent[:, 0].any()
+            assert (i[:, 1, st.I_FINISHED] == 1).all() and (i[:, 0, st.I_FINISHED] == 0).all()
+            gap = np.hypot(f[:, 0, st.F_X] - f[:, 1, st.F_X], f[:, 0, st.F_Y] - f[:, 1, st.F_Y])
+            np.testing.assert_allclose(gap, PHANTOM_GAP)
+        batch.step(rng.uniform(-1.0, 1.0, size=(6, 2, 2)))
+    plain = RaceBatch(make_config("fixed-rl"), 6, seed=3)
+    plain.reset(3)
+    assert not any(block.absent.any() for block in plain.blocks)
