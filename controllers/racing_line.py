@@ -45,6 +45,12 @@ class RacingLine:
             np.append(self.speed, self.speed[0]),
         )
 
+    @property
+    def closed_s(self) -> np.ndarray:
+        """(M + 1,) [m] the samples' centre-line progress with the first repeated one lap on (its last entry is
+        the lap length)."""
+        return self._closed[1]
+
     def offset_at(self, s: float | np.ndarray) -> float | np.ndarray:
         """Lateral offset [m] of the line at centre-line progress ``s`` (periodic interpolation)."""
         length, s_closed, offset_closed, _ = self._closed
@@ -120,6 +126,15 @@ def minimum_curvature_offsets(
     return s, _solve_box_qp(h_curv, q_curv, lower, upper)
 
 
+def brake_sweep(v: np.ndarray, ds: np.ndarray, decel: float) -> None:
+    """One backward pass round a closed line, in place: no speed ``v[i]`` [m/s] faster than braking at ``decel``
+    [m/s^2] over ``ds[i]`` [m] (from sample i to i + 1) reaches the next sample's."""
+    m = len(v)
+    for i in range(m - 1, -1, -1):
+        j = (i + 1) % m
+        v[i] = min(v[i], np.sqrt(v[j] ** 2 + 2.0 * decel * ds[i]))
+
+
 def speed_profile(xy: np.ndarray, kart: KartParams, wear: float) -> tuple[np.ndarray, float]:
     """(speed at each point, lap time) of a closed line under the kart's limits at tyre wear ``wear``."""
     nxt = np.roll(xy, -1, axis=0)
@@ -138,9 +153,7 @@ def speed_profile(xy: np.ndarray, kart: KartParams, wear: float) -> tuple[np.nda
         for i in range(m):
             j = (i + 1) % m
             v[j] = min(v[j], np.sqrt(v[i] ** 2 + 2.0 * kart.acceleration * ds[i]))
-        for i in range(m - 1, -1, -1):
-            j = (i + 1) % m
-            v[i] = min(v[i], np.sqrt(v[j] ** 2 + 2.0 * kart.braking * ds[i]))
+        brake_sweep(v, ds, kart.braking)
     lap_time = float(np.sum(2.0 * ds / (v + np.roll(v, -1))))
     return v, lap_time
 

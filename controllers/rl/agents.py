@@ -89,6 +89,11 @@ class E2EParams:
     speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
 
 
+def _ceiling_margin(params: MCTSRLParams | FixedRLParams | E2EParams) -> float | None:
+    """The shield's margin [m/s], or None with the shield off."""
+    return params.speed_ceiling_margin_mps if params.line_speed_shield else None
+
+
 def build_mcts_rl(params: MCTSRLParams) -> Controller:
     """MCTS planner + RL tracker."""
     planner = MCTSPlanner(
@@ -101,7 +106,7 @@ def build_mcts_rl(params: MCTSRLParams) -> Controller:
             "mcts-rl",
             deterministic=params.deterministic,
             stall_recovery=params.stall_recovery,
-            speed_ceiling_margin=params.speed_ceiling_margin_mps if params.line_speed_shield else None,
+            speed_ceiling_margin=_ceiling_margin(params),
         ),
         rate_hz=RL_RATE_HZ,
     )
@@ -117,7 +122,7 @@ def build_fixed_rl(params: FixedRLParams) -> Controller:
             "fixed-rl",
             deterministic=params.deterministic,
             stall_recovery=params.stall_recovery,
-            speed_ceiling_margin=params.speed_ceiling_margin_mps if params.line_speed_shield else None,
+            speed_ceiling_margin=_ceiling_margin(params),
             line_margin=params.line_margin_m,
         ),
         rate_hz=RL_RATE_HZ,
@@ -153,5 +158,5 @@ def build_e2e(params: E2EParams) -> Controller:
     return E2EController(
         deterministic=params.deterministic,
         stall_recovery=params.stall_recovery,
-        speed_ceiling_margin=params.speed_ceiling_margin_mps if params.line_speed_shield else None,
+        speed_ceiling_margin=_ceiling_margin(params),
     )

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controllers.base import Action
-from controllers.racing_line import RacingLine
+from controllers.racing_line import RacingLine, brake_sweep
 from sim_core.kart import throttle_for_acceleration
 from sim_core.params import KartParams
 
@@ -40,16 +40,12 @@ class LineSpeedShield:
         """The shield of ``line`` for ``kart``: the profile plus ``margin`` [m/s], and no faster than braking at
         ``braking_use`` of the kart's limit lets it reach that anywhere ahead (a backward pass, twice round the
         closed line)."""
-        length = float(line.s[-1] + (line.s[1] - line.s[0]))
-        ds = np.diff(np.append(line.s, line.s[0] + length))
+        s_closed = line.closed_s
         ceiling = np.asarray(line.speed, dtype=np.float64) + margin
-        decel = braking_use * kart.braking
-        m = len(ceiling)
+        ds = np.diff(s_closed)
         for _ in range(2):
-            for i in range(m - 1, -1, -1):
-                j = (i + 1) % m
-                ceiling[i] = min(ceiling[i], np.sqrt(ceiling[j] ** 2 + 2.0 * decel * ds[i]))
-        return cls(np.append(line.s, line.s[0] + length), np.append(ceiling, ceiling[0]), kart.as_array(), gain)
+            brake_sweep(ceiling, ds, braking_use * kart.braking)
+        return cls(s_closed, np.append(ceiling, ceiling[0]), kart.as_array(), gain)
 
     def ceiling(self, progress: float) -> float:
         """Highest allowed speed [m/s] at ``progress`` [m] along the centre line."""
