@@ -26,6 +26,7 @@ class Plan:
     iterations: int
     nodes: int
     seconds: float  # [s] wall time of the search
+    padded: int = 0  # trailing ego waypoints the search did not reach (the ego holds its lane there): not planned
 
     @property
     def ego_waypoints(self) -> tuple[Waypoint, ...]:

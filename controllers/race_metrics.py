@@ -3,7 +3,7 @@
 
 * opponent prediction accuracy: for every plan a tactical driver applies, the lane it predicts for each other
   kart at that kart's next 1, 2 and 3 checkpoints, against the lane the kart then crossed them in;
-* plan lengths: the fewest ego waypoints of any applied tactical plan (no plan collapse).
+* plan lengths: the fewest ego waypoints of any applied tactical plan, padding not counted (no plan collapse).
 
 Passes are the referee's (``KartResult.passes``).
 """
@@ -46,7 +46,7 @@ class RaceMetrics:
                 self._applied[k] = driver.plans_applied
                 plan = driver.active_plan
                 if plan is not None and plan.iterations > 0:
-                    ego = len(plan.ego_waypoints)
+                    ego = len(plan.ego_waypoints) - plan.padded  # padding is not a plan
                     self.shortest_plan[k] = min(self.shortest_plan.get(k, ego), ego)
                     for other, waypoints in plan.opponent_waypoints().items():
                         ahead = views[other].checkpoints_passed

@@ -39,6 +39,10 @@ SPEED_CEILING_HELP = (
     "0 m/s: exactly the profile (ours, not the paper's: controllers.rl.shield)"
 )
 SHIELD_HELP = "never faster than the racing line's speed profile plus the margin (ours, not the paper's)"
+KEEP_DISTANCE_HELP = (
+    "brake rather than close on a kart ahead in the path faster than it could stop short of the rules' buffer "
+    "(ours, not the paper's)"
+)
 
 STALL_RECOVERY_HELP = (
     "after 0.5 s stalled, drive off (or back off a wall) for 1 s; the policy never reverses (ours, not the paper's)"
@@ -52,12 +56,20 @@ class MCTSRLParams:
     iterations: int = parameter(2000, "MCTS iterations per plan", minimum=1, maximum=20_000)
     horizon: int = parameter(8, "checkpoints the tactical game looks ahead", minimum=1, maximum=16)
     planner_rate_hz: float = parameter(1.0, "re-plans per second", unit="Hz", minimum=0.1, maximum=10.0)
+    lane_change_slack: int = parameter(
+        2,
+        "lanes of the rule's limit per straight the plans leave unused, for the policy's tracking error "
+        "(ours, not the paper's)",
+        minimum=0,
+        maximum=4,
+    )
     deterministic: bool = parameter(
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
     stall_recovery: bool = parameter(True, STALL_RECOVERY_HELP)
     line_speed_shield: bool = parameter(True, SHIELD_HELP)
     speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
+    keep_distance: bool = parameter(True, KEEP_DISTANCE_HELP)
 
 
 @dataclass(frozen=True)
@@ -73,6 +85,7 @@ class FixedRLParams:
     stall_recovery: bool = parameter(True, STALL_RECOVERY_HELP)
     line_speed_shield: bool = parameter(True, SHIELD_HELP)
     speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
+    keep_distance: bool = parameter(True, KEEP_DISTANCE_HELP)
 
 
 @dataclass(frozen=True)
@@ -87,6 +100,7 @@ class E2EParams:
         False, SHIELD_HELP + ": the racing line is a planner's, which the end-to-end agent has not"
     )
     speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
+    keep_distance: bool = parameter(False, KEEP_DISTANCE_HELP + ": off, as the end-to-end agent is the policy alone")
 
 
 def _ceiling_margin(params: MCTSRLParams | FixedRLParams | E2EParams) -> float | None:
@@ -97,7 +111,10 @@ def _ceiling_margin(params: MCTSRLParams | FixedRLParams | E2EParams) -> float |
 def build_mcts_rl(params: MCTSRLParams) -> Controller:
     """MCTS planner + RL tracker."""
     planner = MCTSPlanner(
-        iterations=params.iterations, rate_hz=params.planner_rate_hz, params=GameParams(horizon=params.horizon)
+        iterations=params.iterations,
+        rate_hz=params.planner_rate_hz,
+        params=GameParams(horizon=params.horizon),
+        lane_change_slack=params.lane_change_slack,
     )
     return HierarchicalController(
         "mcts-rl",
@@ -107,6 +124,7 @@ def build_mcts_rl(params: MCTSRLParams) -> Controller:
             deterministic=params.deterministic,
             stall_recovery=params.stall_recovery,
             speed_ceiling_margin=_ceiling_margin(params),
+            keep_distance=params.keep_distance,
         ),
         rate_hz=RL_RATE_HZ,
     )
@@ -124,6 +142,7 @@ def build_fixed_rl(params: FixedRLParams) -> Controller:
             stall_recovery=params.stall_recovery,
             speed_ceiling_margin=_ceiling_margin(params),
             line_margin=params.line_margin_m,
+            keep_distance=params.keep_distance,
         ),
         rate_hz=RL_RATE_HZ,
     )
@@ -141,8 +160,11 @@ class E2EController:
         deterministic: bool = True,
         stall_recovery: bool = False,
         speed_ceiling_margin: float | None = None,
+        keep_distance: bool = False,
     ) -> None:
-        self.tracker = RLTracker("e2e", folder, deterministic, stall_recovery, speed_ceiling_margin)
+        self.tracker = RLTracker(
+            "e2e", folder, deterministic, stall_recovery, speed_ceiling_margin, keep_distance=keep_distance
+        )
 
     def reset(self, context: RaceContext) -> None:
         """Load the weights and start a race."""
@@ -159,4 +181,5 @@ def build_e2e(params: E2EParams) -> Controller:
         deterministic=params.deterministic,
         stall_recovery=params.stall_recovery,
         speed_ceiling_margin=_ceiling_margin(params),
+        keep_distance=params.keep_distance,
     )

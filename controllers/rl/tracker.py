@@ -33,7 +33,7 @@ from controllers.rl.config import DECISION_STEPS, EPISODE_STEPS, STACK, AgentKin
 from controllers.rl.observations import TrackTables, build_frame, frame_size, place_phantoms
 from controllers.rl.policy import Policy, load_policy, weights_folder
 from controllers.rl.recovery import StallRecovery
-from controllers.rl.shield import LineSpeedShield
+from controllers.rl.shield import FollowingShield, LineSpeedShield
 from controllers.rl.spawns import racing_lane_at_checkpoints
 from sim_core import state as st
 from sim_core.observation import Observation
@@ -68,7 +68,8 @@ class RLTracker:
 
     With ``speed_ceiling_margin`` set, a :class:`~controllers.rl.shield.LineSpeedShield` brakes whenever the kart
     is over the racing line's speed profile by more than that margin [m/s] (``line_margin``: the line's margin
-    inside the walls, as the planner's).
+    inside the walls, as the planner's). With ``keep_distance``, a :class:`~controllers.rl.shield.FollowingShield`
+    brakes whenever the kart closes on a kart ahead in its path too fast to stop short of the rules' buffer.
 
     By default (``deterministic``) it decides by the policy's Gaussian: the mean steer and the pedal branch the
     Gaussian most likely picks (:meth:`controllers.rl.policy.Policy.act`). Otherwise it samples the Gaussian, as
@@ -84,8 +85,11 @@ class RLTracker:
         stall_recovery: bool = False,
         speed_ceiling_margin: float | None = None,
         line_margin: float = 1.0,
+        keep_distance: bool = False,
     ) -> None:
         self.agent = agent
+        self.keep_distance = keep_distance
+        self.following: FollowingShield | None = None
         self.recovery: StallRecovery | None = StallRecovery() if stall_recovery else None
         self.speed_ceiling_margin = speed_ceiling_margin
         self.line_margin = line_margin
@@ -109,6 +113,7 @@ class RLTracker:
         if self.speed_ceiling_margin is not None:
             line = optimise_racing_line(track, context.kart, margin=self.line_margin)
             self.shield = LineSpeedShield.of(line, context.kart, self.speed_ceiling_margin)
+        self.following = FollowingShield.of(context.kart) if self.keep_distance else None
         sizes = {STACK * frame_size(m): m for m in range(1, 9)}
         if self.policy.obs_size not in sizes:
             raise ValueError(f"{self.agent} weights take {self.policy.obs_size} floats: no race size gives that")
@@ -160,6 +165,8 @@ class RLTracker:
         self.action = Action(float(np.clip(inputs[0, 0], -1, 1)), float(np.clip(inputs[0, 1], -1, 1)))
         if self.shield is not None:
             self.action = self.shield.limit(self.action, me.speed, me.progress)
+        if self.following is not None:
+            self.action = self.following.limit(self.action, me, observation.karts, self._ctx.track)
         if self.recovery is not None:
             _, tangent = self._ctx.track.point_at(me.progress)
             error = math.remainder(math.atan2(tangent[1], tangent[0]) - me.heading, math.tau)

@@ -58,17 +58,33 @@ class MCTSPlanner:
     """
 
     def __init__(
-        self, iterations: int = 2000, rate_hz: float = 1.0, params: GameParams | None = None, racing_line: bool = True
+        self,
+        iterations: int = 2000,
+        rate_hz: float = 1.0,
+        params: GameParams | None = None,
+        racing_line: bool = True,
+        lane_change_slack: int = 0,
     ) -> None:
+        if lane_change_slack < 0:
+            raise ValueError("lane_change_slack must be >= 0")
         self.iterations = iterations
         self.rate_hz = rate_hz
         self.params = params or GameParams()
         self.racing_line = racing_line
+        # lanes of the rule's limit L left unplanned on each straight: a tracker that does not hit its lanes
+        # exactly (a learned one) may cross a boundary once more than the plan, which the referee counts
+        self.lane_change_slack = lane_change_slack
         self._planner: TacticalPlanner | None = None
         self._context: RaceContext | None = None
         self._line_lanes: tuple[int, ...] = ()
         self._line: RacingLine | None = None
         self._committed: dict[int, int] = {}
+
+    @property
+    def lane_limit(self) -> int:
+        """The lane-change limit the plans keep to: the race's L less the slack (never below 0)."""
+        assert self._context is not None, "reset() first"
+        return max(self._context.lane_change_limit - self.lane_change_slack, 0)
 
     def reset(self, context: RaceContext) -> None:
         """Build the game tables for this track and kart (and the racing line's lanes)."""
@@ -82,7 +98,7 @@ class MCTSPlanner:
             self.params,
             iterations=self.iterations,
             seed=context.seed,
-            lane_limit=context.lane_change_limit,
+            lane_limit=self.lane_limit,
             line=self._line,
         )
 
@@ -167,7 +183,7 @@ class MCTSPlanner:
                 continue
             point = track.lane_point(first.checkpoint, me.lane)
             kept = replace(first, lane=me.lane, position=(float(point[0]), float(point[1])))
-            if _lanes_legal(track, me.lane, me.lane_changes, [kept, *waypoints[1:]], self._context.lane_change_limit):
+            if _lanes_legal(track, me.lane, me.lane_changes, [kept, *waypoints[1:]], self.lane_limit):
                 return replace(plan, waypoints={**plan.waypoints, plan.ego: (kept, *waypoints[1:])})
         return plan
 
@@ -215,7 +231,7 @@ class MCTSPlanner:
         and every waypoint with no kart ahead at top speed (the tracker then drives the line's speed profile)."""
         assert self._context is not None
         track = self._context.track
-        limit = self._context.lane_change_limit
+        limit = self.lane_limit
         opponents = [w for ws in plan.opponent_waypoints().values() for w in ws]
         waypoints = list(plan.ego_waypoints)
         for i, w in enumerate(waypoints):

@@ -90,8 +90,9 @@ class TacticalPlanner:
     def root_state(self, players: Sequence[PlayerState], ego: int) -> tuple[np.ndarray, list[int]]:
         """The game's root: players within the section window of the ego, all moved to the leader's checkpoint.
 
-        A player behind the leading checkpoint is advanced to it in its own lane at its current speed (the
-        original set its time from an older crossing instead). Times are relative to the earliest player.
+        A player behind the leading checkpoint is advanced to it in its own lane by the game's own fastest legal
+        moves (:meth:`_advance`; the original set its time from an older crossing instead). Times are relative
+        to the earliest player.
         """
         by_kart = {p.kart: p for p in players}
         if ego not in by_kart:
@@ -100,27 +101,66 @@ class TacticalPlanner:
         window = self.params.section_window
         chosen = [me] + [p for p in players if p.kart != ego and abs(p.checkpoint - me.checkpoint) < window]
         leader_cp = max(p.checkpoint for p in chosen)
-        n = self.track.n_checkpoints
         state = np.zeros((len(chosen), rules.N_FIELDS), dtype=np.int64)
         times = []
         for row, p in enumerate(chosen):
-            t = p.time
-            for c in range(p.checkpoint, leader_cp):
-                lane = p.lane - 1
-                t += self.tables.distance[c % n, lane, lane] / max(p.speed, 1.0)
-            times.append(t)
-            state[row, rules.CHECKPOINT] = leader_cp
+            state[row, rules.CHECKPOINT] = p.checkpoint
             state[row, rules.LANE] = p.lane - 1
             state[row, rules.PREV_LANE] = p.lane - 1
             state[row, rules.MODELLED] = int(p.modelled and p.kart != ego)
             state[row, rules.BIN] = self.speed_bin(p.speed)
             state[row, rules.WEAR] = round(min(max(p.wear, 0.0), 1.0) * WEAR_UNITS)
             state[row, rules.LANE_COUNT] = p.lane_changes
+            times.append(p.time + self._advance(state[row], leader_cp, p.speed))
+            self._slow_to_feasible(state[row])
         earliest = min(times)
         for row, t in enumerate(times):
             state[row, rules.TIME] = round((t - earliest) * TIME_UNITS_PER_S)
             state[row, rules.PREV_TIME] = state[row, rules.TIME]
         return state, [p.kart for p in chosen]
+
+    def _advance(self, row: np.ndarray, checkpoint: int, speed: float) -> float:
+        """Move one player's state ``row`` (in place) forward to ``checkpoint`` in its own lane by the game's
+        fastest legal moves, and return the time [s] that takes.
+
+        A kart a checkpoint behind the leader may be on its way into a hairpin: carried there at its present
+        speed it would enter the game faster than the corner can be braked for, a dead end with no legal move
+        (10 of mcts-lqng's 108 plans in a race on ``complex`` behind fixed-lqng had no searched ego move for this
+        reason, session 11). Where
+        the game has no legal move in the lane (already a dead end), the kart keeps its speed on the way."""
+        n = self.track.n_checkpoints
+        single = row[np.newaxis, :].copy()
+        seconds = 0.0
+        lane = int(row[rules.LANE])
+        while int(single[0, rules.CHECKPOINT]) < checkpoint:
+            grip_now, grip_next = rules.mover_grip(self.tables, single, 0)
+            vbin, arrival, count = rules.fastest_in_lane(self.tables, single, 0, lane, grip_now, grip_next)
+            if vbin < 0:
+                c = int(single[0, rules.CHECKPOINT])
+                seconds += self.tables.distance[c % n, lane, lane] / max(speed, 1.0)
+                single[0, rules.CHECKPOINT] += 1
+                continue
+            seconds += (arrival - int(single[0, rules.TIME])) / TIME_UNITS_PER_S
+            rules.apply_outcome(self.tables, single, 0, lane, vbin, arrival, count)
+        row[:] = single[0]
+        row[rules.PREV_LANE] = lane
+        row[rules.MODELLED] = single[0, rules.MODELLED]
+        return seconds
+
+    def _slow_to_feasible(self, row: np.ndarray) -> None:
+        """Lower one player's speed bin (in place) to the fastest from which it has a legal move, ignoring the
+        other players. A kart predicted to reach a hairpin's entry faster than the game's braking model can
+        stop it for the corner is a dead end (no legal move, the search then plans nothing for it); the real
+        kart brakes a little harder or later than the model's profile, so the nearest state the game can
+        continue from stands for it."""
+        single = row[np.newaxis, :].copy()
+        lanes = self.tables.distance.shape[1]
+        while int(single[0, rules.BIN]) > 0:
+            grip_now, grip_next = rules.mover_grip(self.tables, single, 0)
+            if any(rules.fastest_in_lane(self.tables, single, 0, j, grip_now, grip_next)[0] >= 0 for j in range(lanes)):
+                break
+            single[0, rules.BIN] -= 1
+        row[rules.BIN] = single[0, rules.BIN]
 
     # ------------------------------------------------------------------ search
     def plan(self, players: Sequence[PlayerState], ego: int, committed: dict[int, int] | None = None) -> Plan:
@@ -210,12 +250,15 @@ class TacticalPlanner:
                     time=float(state[rules.TIME]) / TIME_UNITS_PER_S,
                 )
             )
-        self._pad(per_player[ego], root_cp, int(tree.state[0][0, rules.LANE]) + 1)
-        return Plan(ego, root_cp, {k: tuple(w) for k, w in per_player.items()}, iterations, tree.size, seconds)
+        padded = self._pad(per_player[ego], root_cp, int(tree.state[0][0, rules.LANE]) + 1)
+        waypoints = {k: tuple(w) for k, w in per_player.items()}
+        return Plan(ego, root_cp, waypoints, iterations, tree.size, seconds, padded)
 
-    def _pad(self, waypoints: list[Waypoint], root_cp: int, root_lane: int) -> None:
-        """Fill the ego's plan to the horizon (a stuck ego: hold the lane at the lowest speed bin)."""
+    def _pad(self, waypoints: list[Waypoint], root_cp: int, root_lane: int) -> int:
+        """Fill the ego's plan to the horizon (a stuck ego: hold the lane at the lowest speed bin); returns how many
+        waypoints that added."""
         tb = self.tables
+        searched = len(waypoints)
         while len(waypoints) < self.params.horizon:
             last = waypoints[-1] if waypoints else None
             checkpoint = last.checkpoint + 1 if last else root_cp + 1
@@ -224,6 +267,7 @@ class TacticalPlanner:
             waypoints.append(
                 Waypoint(checkpoint, lane, self._lane_point(checkpoint, lane), float(tb.bin_high[0]), time_s)
             )
+        return len(waypoints) - searched
 
     def _lane_point(self, checkpoint: int, lane: int) -> tuple[float, float]:
         """:meth:`~sim_core.track.Track.lane_point` of ``lane`` (1-based) at ``checkpoint`` (modulo a lap), kept

@@ -101,8 +101,15 @@ def _too_close(
     to ``m1`` at ``u1`` (times in 0.01 s). Both are interpolated linearly along the section; at each sampled
     point the time gap at the same place times the first kart's mean speed is their distance along the track,
     a collision when under ``window`` [m] with the lateral distance under the clearance.
+
+    Two karts already closer than ``window`` at the section's start (a follower that has caught up) collide
+    only if they come closer still: the start is given, not chosen, and without this every move of such a
+    follower would be illegal (no plan at all for it, while the real kart just keeps its distance).
     """
     speed = tb.distance[c, 0, 0] / max((t1 - t0) / 100.0, 1e-3)
+    start_gap = abs(t0 - u0) / 100.0 * speed
+    if abs(l0 - m0) < tb.lateral_clearance and start_gap < window:
+        window = start_gap
     for k in range(COLLISION_SAMPLES):
         f = k / (COLLISION_SAMPLES - 1)
         gap = abs((t0 + f * (t1 - t0)) - (u0 + f * (u1 - u0))) / 100.0

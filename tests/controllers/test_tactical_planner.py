@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as hs
 
+from controllers.racing_line import optimise_racing_line
 from controllers.tactical import rules
 from controllers.tactical.exact import optimal_first_moves, random_small_games
 from controllers.tactical.mcts import SearchTree
@@ -109,7 +110,7 @@ def test_root_uses_the_real_speed_bin_and_the_section_window() -> None:
     track = TRACKS["oval"]
     planner = TacticalPlanner(track, PAPER_KART)
     far = PlayerState(2, 40, 1, 14.0, 0.0, 0.2, 0)
-    players = [PlayerState(0, 30, 2, 12.4, 10.0, 0.25, 1), PlayerState(1, 31, 3, 9.0, 10.4, 0.3, 0), far]
+    players = [PlayerState(0, 31, 2, 12.4, 10.0, 0.25, 1), PlayerState(1, 30, 3, 9.0, 9.6, 0.3, 0), far]
     root, karts = planner.root_state(players, 0)
     assert karts == [0, 1]
     assert root[0, rules.BIN] == 6  # 12.4 m/s lies in [12, 13)
@@ -117,6 +118,46 @@ def test_root_uses_the_real_speed_bin_and_the_section_window() -> None:
     assert root[0, rules.LANE_COUNT] == 1
     with pytest.raises(ValueError):
         planner.root_state(players, ego=5)
+
+
+def test_a_kart_behind_is_advanced_by_the_games_own_moves() -> None:
+    """The kart behind the leader's checkpoint reaches it by its fastest legal moves in its lane: on the oval's
+    start straight it accelerates (9 m/s at checkpoint 1, faster at 2), and it arrives when those moves say."""
+    planner = TacticalPlanner(TRACKS["oval"], PAPER_KART)
+    players = [PlayerState(0, 2, 2, 12.0, 3.0, 0.25, 0), PlayerState(1, 1, 3, 9.0, 2.5, 0.25, 0)]
+    root, _ = planner.root_state(players, 0)
+    single = np.zeros((1, rules.N_FIELDS), dtype=np.int64)
+    single[0, rules.CHECKPOINT], single[0, rules.LANE], single[0, rules.PREV_LANE] = 1, 2, 2
+    single[0, rules.BIN] = planner.speed_bin(9.0)
+    single[0, rules.WEAR] = 2500
+    grip_now, grip_next = rules.mover_grip(planner.tables, single, 0)
+    vbin, arrival, _ = rules.fastest_in_lane(planner.tables, single, 0, 2, grip_now, grip_next)
+    assert vbin > planner.speed_bin(9.0)
+    assert root[1, rules.CHECKPOINT] == 2 and root[1, rules.LANE] == 2 and root[1, rules.BIN] == vbin
+    # times relative to the earlier of the two: 2.5 s + the move's time against 3.0 s
+    assert abs((2.5 + arrival / 100.0 - 3.0) * 100.0 - (root[1, rules.TIME] - root[0, rules.TIME])) <= 1.0
+
+
+@pytest.mark.parametrize("behind", [True, False])
+def test_a_kart_at_a_hairpin_entry_enters_the_game_with_a_legal_move(behind: bool) -> None:
+    """A kart racing into the hairpin at checkpoint 17 of ``complex`` (6.4 m to brake to 5.6 m/s in the game
+    calibrated to the racing line) at 13.5 m/s:
+    carried into the game at that speed it had no legal move, and every plan for it was padding (10 of 108
+    plans of a race, session 11). Whether it is a checkpoint behind the leader (advanced to it) or predicted
+    at the hairpin's entry itself, it now enters at a speed the game can brake from, and the search plans it."""
+    track = TRACKS["complex"]
+    planner = TacticalPlanner(track, PAPER_KART, iterations=500, seed=1, line=optimise_racing_line(track, PAPER_KART))
+    ego = PlayerState(0, 16 if behind else 17, 3, 13.5, 10.0, 0.28, 0)
+    leader = PlayerState(1, 17, 3, 9.5, 10.0 if behind else 9.3, 0.28, 0, modelled=True)
+    root, _ = planner.root_state([ego, leader], 0)
+    single = root[:1].copy()
+    grip_now, grip_next = rules.mover_grip(planner.tables, single, 0)
+    assert any(rules.fastest_in_lane(planner.tables, single, 0, j, grip_now, grip_next)[0] >= 0 for j in range(4))
+    plan = planner.plan([ego, leader], 0)
+    searched = [w for w in plan.ego_waypoints if w.checkpoint > 17]
+    assert len(searched) >= planner.params.horizon - 1
+    # planned times grow by the game's moves, not by the padding's whole seconds
+    assert any(abs(w.time - round(w.time)) > 1e-6 for w in searched)
 
 
 def test_replanning_from_the_same_root_grows_the_same_tree() -> None:

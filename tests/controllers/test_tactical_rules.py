@@ -223,3 +223,29 @@ def test_players_side_by_side_may_not_swap_sides() -> None:
     for lane in (0, 1):
         assert all(abs(a - 100) >= tb.collision_window for a in arrivals.get(lane, []))
     assert arrivals.get(2) or arrivals.get(3)
+
+
+def test_a_follower_already_within_the_window_keeps_its_distance_but_may_not_close_in() -> None:
+    """A follower 0.15 s (2.2 m at 14.5 m/s) behind the leader in its lane, already inside the 3 m window: the
+    start is given, so it may follow at that distance or drop back (before, it had no legal move at all and
+    its plans were padding), but no move brings it closer to the leader than it already is."""
+    tb = build_tables(get_track("oval"), PAPER_KART, GameParams())
+    state = np.zeros((2, rules.N_FIELDS), dtype=np.int64)
+    state[:, rules.CHECKPOINT] = 1  # the start straight
+    state[:, rules.LANE] = state[:, rules.PREV_LANE] = 1
+    state[:, rules.BIN] = len(tb.bin_low) - 1
+    state[:, rules.TIME] = (15, 0)
+    state[:, rules.PREV_TIME] = state[:, rules.TIME]
+    state[:, rules.WEAR] = 2500
+    moves = np.empty(64, dtype=np.int64)
+    assert rules.next_player(state, 1) == 1
+    assert rules.legal_moves(tb, state, 1, moves) > 0
+    bins = len(tb.bin_low)
+    assert rules.apply_move(tb, state, 1, 1 * bins + bins - 1)  # the leader holds its lane at top speed
+    count = rules.legal_moves(tb, state, 0, moves)
+    assert count > 0
+    for m in moves[:count]:
+        lane, vbin = divmod(int(m), bins)
+        arrival, _, _ = rules.move_outcome(tb, state, 0, lane, vbin)
+        if abs(tb.lane_offset[2, lane] - tb.lane_offset[2, 1]) < tb.lateral_clearance:
+            assert arrival - state[1, rules.TIME] >= 15

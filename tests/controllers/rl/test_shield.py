@@ -1,7 +1,12 @@
-"""The line-speed shield: its ceiling against the racing line's profile, when it brakes, and that it holds the
-RL agents under the ceiling in a race where the policy alone does not stay there."""
+"""The RL tracker's shields. The line-speed shield: its ceiling against the racing line's profile, when it brakes,
+and that it holds the RL agents under the ceiling in a race where the policy alone does not stay there. The
+following shield: its standoffs from the rules' buffers, the allowed speed behind a kart against the hand-worked
+formula, and which karts it ignores."""
 
 from __future__ import annotations
+
+import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -12,9 +17,9 @@ from controllers.base import Action
 from controllers.race import RaceSpec, run_race
 from controllers.racing_line import optimise_racing_line
 from controllers.registry import make_controller
-from controllers.rl.shield import LineSpeedShield
+from controllers.rl.shield import FollowingShield, LineSpeedShield
 from sim_core.kart import throttle_for_acceleration
-from sim_core.observation import observe
+from sim_core.observation import KartView, observe
 from sim_core.params import kart_preset
 from sim_core.track_io import get_track
 
@@ -88,3 +93,80 @@ def test_in_a_race_the_shield_holds_the_kart_near_its_ceiling_where_the_policy_a
     shield then holds full brake)."""
     assert _worst_excess(shielded=False) > 3.0
     assert _worst_excess(shielded=True) < 1.5
+
+
+# ---------------------------------------------------------------------------------------------- following shield
+TRACK = get_track("complex")
+FOLLOW = FollowingShield.of(KART)
+
+
+def _view(index: int, progress: float, lateral: float, speed: float, heading_offset: float = 0.0) -> KartView:
+    """A kart at ``progress`` / ``lateral`` on complex, heading along the centre line (plus an offset [rad])."""
+    point, tangent = TRACK.point_at(progress)
+    normal = np.array([-tangent[1], tangent[0]])
+    x, y = point + lateral * normal
+    heading = math.atan2(float(tangent[1]), float(tangent[0])) + heading_offset
+    return KartView(
+        index, float(x), float(y), heading, speed, progress, lateral, 0.25, 1, 2, 0, 0.0, speed, 0.25, False
+    )
+
+
+def test_the_rules_buffers_set_the_standoffs() -> None:
+    """A body length (2 m) plus s1 = 1.5 m directly behind, plus s0 = 0.5 m otherwise (eqs. (8)-(9))."""
+    assert FOLLOW.standoff_behind == pytest.approx(3.5)
+    assert FOLLOW.standoff == pytest.approx(2.5)
+    assert FOLLOW.clearance == pytest.approx(1.2)
+
+
+def test_closing_on_a_kart_directly_ahead_is_limited_to_what_braking_can_still_absorb() -> None:
+    """10 m behind a kart at 8 m/s in the same line: the allowed speed is 8 + sqrt(2 b (10 - 3.5)) with b = 0.6
+    of the braking limit, to the centimetre per second."""
+    me, ahead = _view(0, 100.0, 0.0, 14.0), _view(1, 110.0, 0.0, 8.0)
+    expected = 8.0 + math.sqrt(2.0 * 0.6 * KART.braking * 6.5)
+    assert FOLLOW.allowed_speed(me, [me, ahead], TRACK) == pytest.approx(expected, abs=0.05)
+    braked = FOLLOW.limit(Action(0.3, 1.0), replace(me, speed=expected + 2.0), [me, ahead], TRACK)
+    assert braked.steer == 0.3 and braked.throttle < 0.0
+    # inside the standoff: slower than the kart ahead, to open the gap
+    close = _view(0, 107.5, 0.2, 8.0)
+    assert FOLLOW.allowed_speed(close, [close, ahead], TRACK) < 8.0
+
+
+def test_karts_beside_behind_or_finished_do_not_limit() -> None:
+    me = _view(0, 100.0, -1.5, 14.0)
+    beside = _view(1, 104.0, 1.5, 5.0)  # 3 m to the side: a pass, not a collision course
+    behind = _view(2, 96.0, -1.5, 5.0)
+    done = replace(_view(3, 103.0, -1.5, 0.0), finished=True)
+    assert FOLLOW.allowed_speed(me, [me, beside, behind, done], TRACK) == math.inf
+    action = Action(-0.2, 1.0)
+    assert FOLLOW.limit(action, me, [me, beside, behind, done], TRACK) == action
+
+
+def test_with_a_lookahead_a_kart_moving_across_the_path_counts() -> None:
+    """2 m to the side now, but drifting across at 5 m/s: in the path within 0.4 s."""
+    me = _view(0, 100.0, -1.0, 12.0)
+    drifting = _view(1, 104.0, 1.0, 10.0, heading_offset=-0.5)  # heading right, toward the ego's line
+    assert FOLLOW.allowed_speed(me, [me, drifting], TRACK) == math.inf  # no lookahead (the default)
+    looking = replace(FOLLOW, lookahead=0.4)
+    # not level with it (2 m apart now): the s0 standoff; its speed along the track is 10 cos(0.5)
+    expected = 10.0 * math.cos(0.5) + math.sqrt(2.0 * 0.6 * KART.braking * (4.0 - 2.5))
+    assert looking.allowed_speed(me, [me, drifting], TRACK) == pytest.approx(expected, abs=0.1)
+
+
+@given(
+    steer=st.floats(-1.0, 1.0),
+    throttle=st.floats(-1.0, 1.0),
+    speed=st.floats(0.0, 16.0),
+    gap=st.floats(-5.0, 25.0),
+    lateral=st.floats(-3.0, 3.0),
+    other_speed=st.floats(0.0, 16.0),
+)
+def test_the_following_shield_only_ever_lowers_the_pedal(
+    steer: float, throttle: float, speed: float, gap: float, lateral: float, other_speed: float
+) -> None:
+    me, other = _view(0, 300.0, 0.0, speed), _view(1, 300.0 + gap, lateral, other_speed)
+    action = Action(steer, throttle)
+    out = FOLLOW.limit(action, me, [me, other], TRACK)
+    assert out.steer == steer
+    assert out.throttle <= throttle
+    if speed <= FOLLOW.allowed_speed(me, [me, other], TRACK):
+        assert out == action
