@@ -39,6 +39,7 @@ SPEED_CEILING_HELP = (
     "0 m/s: exactly the profile (ours, not the paper's: controllers.rl.shield)"
 )
 SHIELD_HELP = "never faster than the racing line's speed profile plus the margin (ours, not the paper's)"
+LOOKAHEAD_HELP = "how far ahead the karts' sideways motion is extrapolated to tell whether a kart is in the path"
 KEEP_DISTANCE_HELP = (
     "brake rather than close on a kart ahead in the path faster than it could stop short of the rules' buffer "
     "(ours, not the paper's)"
@@ -70,6 +71,7 @@ class MCTSRLParams:
     line_speed_shield: bool = parameter(True, SHIELD_HELP)
     speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
     keep_distance: bool = parameter(True, KEEP_DISTANCE_HELP)
+    keep_distance_lookahead_s: float = parameter(0.0, LOOKAHEAD_HELP, unit="s", minimum=0.0, maximum=2.0)
 
 
 @dataclass(frozen=True)
@@ -86,6 +88,7 @@ class FixedRLParams:
     line_speed_shield: bool = parameter(True, SHIELD_HELP)
     speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
     keep_distance: bool = parameter(True, KEEP_DISTANCE_HELP)
+    keep_distance_lookahead_s: float = parameter(0.8, LOOKAHEAD_HELP, unit="s", minimum=0.0, maximum=2.0)
 
 
 @dataclass(frozen=True)
@@ -125,6 +128,7 @@ def build_mcts_rl(params: MCTSRLParams) -> Controller:
             stall_recovery=params.stall_recovery,
             speed_ceiling_margin=_ceiling_margin(params),
             keep_distance=params.keep_distance,
+            keep_distance_lookahead=params.keep_distance_lookahead_s,
         ),
         rate_hz=RL_RATE_HZ,
     )
@@ -143,6 +147,7 @@ def build_fixed_rl(params: FixedRLParams) -> Controller:
             speed_ceiling_margin=_ceiling_margin(params),
             line_margin=params.line_margin_m,
             keep_distance=params.keep_distance,
+            keep_distance_lookahead=params.keep_distance_lookahead_s,
         ),
         rate_hz=RL_RATE_HZ,
     )

@@ -69,7 +69,8 @@ class RLTracker:
     With ``speed_ceiling_margin`` set, a :class:`~controllers.rl.shield.LineSpeedShield` brakes whenever the kart
     is over the racing line's speed profile by more than that margin [m/s] (``line_margin``: the line's margin
     inside the walls, as the planner's). With ``keep_distance``, a :class:`~controllers.rl.shield.FollowingShield`
-    brakes whenever the kart closes on a kart ahead in its path too fast to stop short of the rules' buffer.
+    brakes whenever the kart closes on a kart ahead in its path too fast to stop short of the rules' buffer
+    (``keep_distance_lookahead``: how far ahead [s] the karts' sideways motion is extrapolated to judge the path).
 
     By default (``deterministic``) it decides by the policy's Gaussian: the mean steer and the pedal branch the
     Gaussian most likely picks (:meth:`controllers.rl.policy.Policy.act`). Otherwise it samples the Gaussian, as
@@ -86,9 +87,11 @@ class RLTracker:
         speed_ceiling_margin: float | None = None,
         line_margin: float = 1.0,
         keep_distance: bool = False,
+        keep_distance_lookahead: float = 0.0,
     ) -> None:
         self.agent = agent
         self.keep_distance = keep_distance
+        self.keep_distance_lookahead = keep_distance_lookahead
         self.following: FollowingShield | None = None
         self.recovery: StallRecovery | None = StallRecovery() if stall_recovery else None
         self.speed_ceiling_margin = speed_ceiling_margin
@@ -113,7 +116,9 @@ class RLTracker:
         if self.speed_ceiling_margin is not None:
             line = optimise_racing_line(track, context.kart, margin=self.line_margin)
             self.shield = LineSpeedShield.of(line, context.kart, self.speed_ceiling_margin)
-        self.following = FollowingShield.of(context.kart) if self.keep_distance else None
+        self.following = (
+            FollowingShield.of(context.kart, lookahead=self.keep_distance_lookahead) if self.keep_distance else None
+        )
         sizes = {STACK * frame_size(m): m for m in range(1, 9)}
         if self.policy.obs_size not in sizes:
             raise ValueError(f"{self.agent} weights take {self.policy.obs_size} floats: no race size gives that")
