@@ -33,8 +33,6 @@ MODELLED = 8  # 1: the player follows the opponent model (the racing line's lane
 N_FIELDS = 9
 
 COLLISION_SAMPLES = 5  # points along a section (both ends included) where two karts' positions are compared
-MAX_HOLD_BACK = 200  # [0.01 s] longest a kart in the lowest speed bin may take over a section to stay behind another
-HOLD_BACK_STEP = 5  # [0.01 s] the resolution of holding back
 
 NO_PLAYER = -1
 
@@ -226,20 +224,6 @@ def bin_arrival(
     if t < 0.0:
         return 0, 0
     arrival = state[p, TIME] + int(t * 100.0 + tb.penalty[c, here, lane] + 0.5)
-    # the lowest bin stands for every speed up to its top (as for cornering, :func:`lane_gate`): a kart that would
-    # run into the one ahead even at that speed holds back behind it instead, up to ``MAX_HOLD_BACK``
-    latest = arrival + (MAX_HOLD_BACK if vbin == 0 else 0)
-    while not _clear(tb, state, p, here, lane, arrival):
-        if arrival >= latest:
-            return 0, 0
-        arrival += HOLD_BACK_STEP
-    return arrival, 1
-
-
-@njit(cache=True, inline="always")
-def _clear(tb: GameTables, state: np.ndarray, p: int, here: int, lane: int, arrival: int) -> bool:
-    """Whether player ``p`` moving from lane ``here`` to ``lane`` and arriving at ``arrival`` keeps clear of the
-    others (eq. (8) gen_coll_avoid at the checkpoint, and along the section)."""
     # eq. (8) gen_coll_avoid as the paper discretises it: no arrival close in time in the same lane or across a path
     if tb.collision_window > 0:
         target = state[p, CHECKPOINT] + 1
@@ -248,9 +232,11 @@ def _clear(tb: GameTables, state: np.ndarray, p: int, here: int, lane: int, arri
                 continue
             # the same lane, or swapping sides with the other on the way (side by side, the paths cross)
             if state[q, LANE] == lane or (here - state[q, PREV_LANE]) * (lane - state[q, LANE]) < 0:
-                return False
+                return 0, 0
     # the same along the section, with a distance window of a kart length plus a margin
-    return not (tb.collision_distance > 0.0 and _collides(tb, state, p, lane, arrival))
+    if tb.collision_distance > 0.0 and _collides(tb, state, p, lane, arrival):
+        return 0, 0
+    return arrival, 1
 
 
 @njit(**NO_REFCOUNT)
