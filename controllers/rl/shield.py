@@ -75,15 +75,15 @@ class FollowingShield:
     still brake to that kart's speed before the gap falls to ``standoff``.
 
     The policies were trained against one opponent on ovals and run into the back of a kart braking ahead of
-    them, or nose into one that moves across: 13 collisions at fault in 20 races of ``mcts-rl`` against
-    ``fixed-rl`` on ``complex`` (session 11), each a race the faster kart had to pass in. A kart is in the
+    them, or nose into one that moves across: 13 collisions at fault in 20 races of ``mcts-rl`` against the
+    stage-2 ``fixed-rl`` on ``complex`` (session 11; 1 with this shield). A kart is in the
     ego's path when it is ahead along the centre line by less than ``reach`` and, now or ``lookahead`` seconds
     on at both karts' present sideways speeds, laterally closer than ``clearance``. The allowed speed is that
     kart's speed along the track plus ``sqrt(2 b (gap - standoff))`` (``b``: ``braking_use`` of the kart's
     braking limit), the speed from which braking at ``b`` meets it at the standoff (inside the standoff: that
-    much under its speed, to open the gap again); over it, the pedal brakes
-    at ``gain`` per m/s over (saturating at the kart's limit). Only ever a lower pedal; steering stays the
-    policy's, so the ego may still pull out and pass."""
+    much under its speed, to open the gap again); over it, the pedal brakes at ``gain`` per m/s over
+    (saturating at the kart's limit). Only ever a lower pedal; steering stays the policy's, so the ego may still
+    pull out and pass."""
 
     kart: np.ndarray  # the kart's packed parameters (sim_core.kart)
     standoff: float  # [m] centre-to-centre gap along the track kept to a kart ahead in the path, not level with it

@@ -126,8 +126,8 @@ class TacticalPlanner:
         A kart a checkpoint behind the leader may be on its way into a hairpin: carried there at its present
         speed it would enter the game faster than the corner can be braked for, a dead end with no legal move
         (10 of mcts-lqng's 108 plans in a race on ``complex`` behind fixed-lqng had no searched ego move for this
-        reason, session 11). Where
-        the game has no legal move in the lane (already a dead end), the kart keeps its speed on the way."""
+        reason, session 11). Where the game has no legal move in the lane (already a dead end), the kart keeps
+        its speed on the way."""
         n = self.track.n_checkpoints
         single = row[np.newaxis, :].copy()
         seconds = 0.0
@@ -144,7 +144,6 @@ class TacticalPlanner:
             rules.apply_outcome(self.tables, single, 0, lane, vbin, arrival, count)
         row[:] = single[0]
         row[rules.PREV_LANE] = lane
-        row[rules.MODELLED] = single[0, rules.MODELLED]
         return seconds
 
     def _slow_to_feasible(self, row: np.ndarray) -> None:
