@@ -122,19 +122,18 @@ class FollowingShield:
         """The highest speed [m/s] the ego may drive now (infinite when nobody is in its path)."""
         length = track.length
         allowed = math.inf
-        my_sideways = _sideways_speed(me, track)
+        _, my_sideways = _track_velocity(me, track)
         for other in others:
             if other.index == me.index or other.finished:
                 continue
             gap = (other.progress - me.progress + 0.5 * length) % length - 0.5 * length
             if not 0.0 < gap < self.reach:
                 continue
+            along, sideways = _track_velocity(other, track)
             lateral_now = other.lateral - me.lateral
-            lateral_then = lateral_now + (_sideways_speed(other, track) - my_sideways) * self.lookahead
+            lateral_then = lateral_now + (sideways - my_sideways) * self.lookahead
             if min(abs(lateral_now), abs(lateral_then)) >= self.clearance and lateral_now * lateral_then > 0.0:
                 continue
-            _, tangent = track.point_at(other.progress)
-            along = other.speed * math.cos(other.heading - math.atan2(float(tangent[1]), float(tangent[0])))
             standoff = self.standoff_behind if abs(lateral_now) < self.width else self.standoff
             # inside the standoff already: slower than the other kart, to open the gap again
             room = gap - standoff
@@ -152,7 +151,9 @@ class FollowingShield:
         return Action(action.steer, float(pedal))
 
 
-def _sideways_speed(kart: KartView, track: Track) -> float:
-    """The kart's speed [m/s] across the track (left-positive), from its heading against the centre line's."""
+def _track_velocity(kart: KartView, track: Track) -> tuple[float, float]:
+    """The kart's velocity [m/s] along and across (left-positive) the track, from its heading against the centre
+    line's there."""
     _, tangent = track.point_at(kart.progress)
-    return kart.speed * math.sin(kart.heading - math.atan2(float(tangent[1]), float(tangent[0])))
+    angle = kart.heading - math.atan2(float(tangent[1]), float(tangent[0]))
+    return kart.speed * math.cos(angle), kart.speed * math.sin(angle)

@@ -154,8 +154,8 @@ class TacticalPlanner:
         continue from stands for it."""
         single = row[np.newaxis, :].copy()
         lanes = self.tables.distance.shape[1]
+        grip_now, grip_next = rules.mover_grip(self.tables, single, 0)  # the bin does not change the grip
         while int(single[0, rules.BIN]) > 0:
-            grip_now, grip_next = rules.mover_grip(self.tables, single, 0)
             if any(rules.fastest_in_lane(self.tables, single, 0, j, grip_now, grip_next)[0] >= 0 for j in range(lanes)):
                 break
             single[0, rules.BIN] -= 1
