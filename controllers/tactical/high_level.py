@@ -28,6 +28,7 @@ INTERACTION_WINDOW = 1.0  # [s] another kart predicted at a checkpoint this much
 # [s] ... or this much later: a kart behind by more than about a kart length cannot be blocked without losing
 # time (it must keep its distance, the follower's duty), so a leader defends by driving the racing line
 BEHIND_WINDOW = 0.15
+LINE_MARGIN = 0.1  # [s] default of MCTSPlanner.line_margin
 MAX_SQUEEZE_LOOKAHEAD = (
     2.0  # [s] how far ahead a kart alongside is extrapolated sideways (:meth:`MCTSPlanner._no_squeeze`)
 )
@@ -64,9 +65,12 @@ class MCTSPlanner:
         params: GameParams | None = None,
         racing_line: bool = True,
         lane_change_slack: int = 0,
+        line_margin: float | None = LINE_MARGIN,
     ) -> None:
         if lane_change_slack < 0:
             raise ValueError("lane_change_slack must be >= 0")
+        if line_margin is not None and line_margin < 0:
+            raise ValueError("line_margin must be >= 0 (or None)")
         self.iterations = iterations
         self.rate_hz = rate_hz
         self.params = params or GameParams()
@@ -74,6 +78,9 @@ class MCTSPlanner:
         # lanes of the rule's limit L left unplanned on each straight: a tracker that does not hit its lanes
         # exactly (a learned one) may cross a boundary once more than the plan, which the referee counts
         self.lane_change_slack = lane_change_slack
+        # [s] with the racing line on, the searched lanes replace the line's only when the game's playout of
+        # them gains this much (:meth:`TacticalPlanner._line_unless_beaten`); None: the search's lanes always
+        self.line_margin = line_margin
         self._planner: TacticalPlanner | None = None
         self._context: RaceContext | None = None
         self._line_lanes: tuple[int, ...] = ()
@@ -100,6 +107,7 @@ class MCTSPlanner:
             seed=context.seed,
             lane_limit=self.lane_limit,
             line=self._line,
+            line_margin=self.line_margin if self.racing_line else None,
         )
 
     def present_state(self, kart: KartView, now: float, ego: int) -> PlayerState:
@@ -200,7 +208,7 @@ class MCTSPlanner:
         me = next(p for p in players if p.kart == observation.ego)
         plan = self._fill_skipped(plan, me)
         if self.racing_line:
-            plan = self._prefer_racing_line(plan, me.lane, me.lane_changes)
+            plan = self._prefer_racing_line(plan, me.lane, me.lane_changes, self._clear_behind(observation))
         plan = self._no_squeeze(plan, me, observation.karts)
         # the root's own crossing (the lane the kart is committed to at its next checkpoint) leads the plan
         point = self._context.track.lane_point(me.checkpoint, me.lane) if self._context else (0.0, 0.0)
@@ -226,22 +234,51 @@ class MCTSPlanner:
             filled.append(Waypoint(c, me.lane, (float(point[0]), float(point[1])), me.speed, 0.0))
         return replace(plan, waypoints={**plan.waypoints, plan.ego: (*filled, *plan.ego_waypoints)})
 
-    def _prefer_racing_line(self, plan: Plan, lane: int, count: int) -> Plan:
+    def _clear_behind(self, observation: Observation) -> frozenset[int]:
+        """The karts now behind the ego with no body overlap: followers whose duty it is to keep their distance
+        (eqs. (8)-(9) gen_coll_avoid), so the ego leads them on the racing line whatever the game predicts."""
+        assert self._context is not None
+        track = self._context.track
+        kart = self._context.kart
+        body_length = 2.0 * (kart.body_half_length + kart.body_radius)
+        me = next(k for k in observation.karts if k.index == observation.ego)
+        clear = set()
+        for other in observation.karts:
+            if other.index == observation.ego or other.finished:
+                continue
+            checkpoints_ahead = me.checkpoints_passed - other.checkpoints_passed
+            gap = (other.progress - me.progress + 0.5 * track.length) % track.length - 0.5 * track.length
+            if checkpoints_ahead >= track.n_checkpoints or (gap < -0.5 * body_length and checkpoints_ahead >= 0):
+                clear.add(other.index)
+        return frozenset(clear)
+
+    def _prefer_racing_line(
+        self, plan: Plan, lane: int, count: int, clear_behind: frozenset[int] = frozenset()
+    ) -> Plan:
         """``plan`` with every non-tactical ego waypoint moved to the racing line's lane where that is legal,
-        and every waypoint with no kart ahead at top speed (the tracker then drives the line's speed profile)."""
+        and every waypoint with no kart ahead at top speed (the tracker then drives the line's speed profile).
+
+        A waypoint is tactical when another kart is predicted at its checkpoint up to ``INTERACTION_WINDOW``
+        before the ego, or up to ``BEHIND_WINDOW`` after it unless that kart is ``clear_behind`` now: the game's
+        predicted gap to a follower is coarse (its speed bins), and a leader that reads a follower a body
+        length back as level defends with lanes that cost more than the follower could gain (on
+        complex-reversed the follower then went round the outside of the first hairpin)."""
         assert self._context is not None
         track = self._context.track
         limit = self.lane_limit
-        opponents = [w for ws in plan.opponent_waypoints().values() for w in ws]
+        opponents = [
+            (w, BEHIND_WINDOW if k not in clear_behind else 0.0)
+            for k, ws in plan.opponent_waypoints().items()
+            for w in ws
+        ]
         waypoints = list(plan.ego_waypoints)
         for i, w in enumerate(waypoints):
             line_lane = self._line_lanes[w.checkpoint % track.n_checkpoints]
             tactical = any(
-                o.checkpoint == w.checkpoint and -INTERACTION_WINDOW < o.time - w.time < BEHIND_WINDOW
-                for o in opponents
+                o.checkpoint == w.checkpoint and -INTERACTION_WINDOW < o.time - w.time < after for o, after in opponents
             )
             behind = any(
-                o.checkpoint == w.checkpoint and -INTERACTION_WINDOW < o.time - w.time <= 0.0 for o in opponents
+                o.checkpoint == w.checkpoint and -INTERACTION_WINDOW < o.time - w.time <= 0.0 for o, _ in opponents
             )
             if not behind:
                 # nobody ahead to keep a distance from: the racing line's speed profile (the tracker's) binds,

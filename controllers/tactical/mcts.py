@@ -33,7 +33,7 @@ def _round_of(state: np.ndarray, start_round: int, final_round: int) -> int:
 
 
 @njit(**NO_REFCOUNT)
-def _fastest_outcome(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins: int) -> tuple[int, int, int]:
+def fastest_outcome(tb: GameTables, state: np.ndarray, p: int, n_lanes: int, bins: int) -> tuple[int, int, int]:
     """(action, arrival, lane-change count) of the legal move with the earliest arrival (then the smaller lane
     change); action -1 if there is none. A modelled player keeps to its lane (:func:`rules.allowed_lane`)."""
     grip_now, grip_next = rules.mover_grip(tb, state, p)
@@ -95,7 +95,7 @@ def _rollout(
         action, arrival, count = -1, 0, 0
         # a modelled player follows its model: the fastest move into its predicted lane
         if state[p, rules.MODELLED] != 0 or np.random.random() < greedy:
-            action, arrival, count = _fastest_outcome(tb, state, p, n_lanes, bins)
+            action, arrival, count = fastest_outcome(tb, state, p, n_lanes, bins)
         else:
             # rejection sampling is uniform over the legal moves and usually needs one or two draws
             for _ in range(REJECTION_TRIES):
@@ -133,7 +133,7 @@ def greedy_line(tb: GameTables, state: np.ndarray, round_cp: int, final_round: i
         if p == rules.NO_PLAYER:
             r += 1
             continue
-        action, arrival, changes = _fastest_outcome(tb, state, p, n_lanes, bins)
+        action, arrival, changes = fastest_outcome(tb, state, p, n_lanes, bins)
         if action < 0:
             if p == 0:
                 return count  # the ego (row 0) is stuck

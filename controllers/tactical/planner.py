@@ -14,7 +14,7 @@ from controllers.racing_line import RacingLine
 from controllers.tactical import rules
 from controllers.tactical.calibration import calibrate_tables
 from controllers.tactical.game import TIME_UNITS_PER_S, WEAR_UNITS, GameParams, GameTables, build_tables
-from controllers.tactical.mcts import SearchTree, greedy_line
+from controllers.tactical.mcts import SearchTree, fastest_outcome, greedy_line
 from sim_core.params import KartParams
 from sim_core.track import Track
 
@@ -23,6 +23,8 @@ DEFAULT_GREEDY = 0.8  # probability that a rollout move is the fastest legal one
 TREE_CAPACITY_PLANS = 8  # a reused tree grows for up to this many plans' budgets before it starts afresh
 PLAN_MIN_VISITS = 30  # a plan follows the search tree only through choices visited at least this often
 COMMIT_MARGIN = 0.02  # value (0.02 = 0.05 s at value_scale 1 s) a new lane must gain to replace a committed one
+
+Move = tuple[int, int, np.ndarray]  # (row of the mover, action, the game state after the move)
 
 
 @dataclass(frozen=True)
@@ -58,8 +60,13 @@ class TacticalPlanner:
         greedy: float = DEFAULT_GREEDY,
         lane_limit: int | None = None,
         line: RacingLine | None = None,
+        line_margin: float | None = None,
     ) -> None:
+        if line_margin is not None and line is None:
+            raise ValueError("line_margin needs the racing line")
         self.track = track
+        # [s] the searched lanes replace the racing line's only when they gain this much over it (None: always)
+        self.line_margin = line_margin
         self.params = params or GameParams()
         self.tables: GameTables = build_tables(track, kart, self.params, lane_limit)
         if line is not None:
@@ -224,7 +231,9 @@ class TacticalPlanner:
         bins = len(tb.bin_low)
         per_player: dict[int, list[Waypoint]] = {k: [] for k in karts}
         path = self._principal_variation(tree, committed)
-        moves = [(int(tree.mover[tree.parent[node]]), int(tree.action[node]), tree.state[node]) for node in path[1:]]
+        moves: list[Move] = [
+            (int(tree.mover[tree.parent[node]]), int(tree.action[node]), tree.state[node]) for node in path[1:]
+        ]
         # beyond the searched tree the plan continues with everyone's fastest legal moves
         state = tree.state[path[-1]].copy()
         tail = np.zeros((len(karts) * self.params.horizon, 2), dtype=np.int64)
@@ -236,6 +245,8 @@ class TacticalPlanner:
                 continue
             rules.apply_move(tb, replay, int(mover), int(action))
             moves.append((int(mover), int(action), replay.copy()))
+        if self.line_margin is not None:
+            moves = self._line_unless_beaten(tree.state[0], root_cp, moves)
         for mover, action, states in moves:
             lane, vbin = divmod(action, bins)
             state = states[mover]
@@ -252,6 +263,63 @@ class TacticalPlanner:
         padded = self._pad(per_player[ego], root_cp, int(tree.state[0][0, rules.LANE]) + 1)
         waypoints = {k: tuple(w) for k, w in per_player.items()}
         return Plan(ego, root_cp, waypoints, iterations, tree.size, seconds, padded)
+
+    def _playout(self, root: np.ndarray, root_cp: int, ego_lanes: dict[int, int] | None) -> tuple[list[Move], bool]:
+        """(moves, complete) of the game played out from ``root`` to the horizon with no search: every other
+        player its model's move (:func:`~controllers.tactical.mcts.fastest_outcome`), the ego its fastest legal
+        move into ``ego_lanes[checkpoint]`` (0-based lanes; beyond them its fastest legal move anywhere), or with
+        ``ego_lanes`` None the racing line's lane as a modelled player. ``complete``: the ego reached the
+        horizon (a lane given with no legal move there, or no move at all, stops the playout)."""
+        tb = self.tables
+        bins = len(tb.bin_low)
+        lanes = tb.distance.shape[1]
+        state = root.copy()
+        state[0, rules.MODELLED] = int(ego_lanes is None)
+        final = root_cp + self.params.horizon
+        moves: list[Move] = []
+        r = root_cp
+        while r < final:
+            p = rules.next_player(state, r)
+            if p == rules.NO_PLAYER:
+                r += 1
+                continue
+            lane = None if p != 0 or ego_lanes is None else ego_lanes.get(int(state[0, rules.CHECKPOINT]) + 1)
+            if lane is None:
+                action, arrival, count = fastest_outcome(tb, state, p, lanes, bins)
+            else:
+                grip_now, grip_next = rules.mover_grip(tb, state, p)
+                vbin, arrival, count = rules.fastest_in_lane(tb, state, p, lane, grip_now, grip_next)
+                action = lane * bins + vbin if vbin >= 0 else -1
+            if action < 0:
+                if p == 0:
+                    return moves, False
+                state[p, rules.CHECKPOINT] = -1  # a stuck opponent leaves the game, as in the search's tail
+                continue
+            rules.apply_outcome(tb, state, p, action // bins, action % bins, arrival, count)
+            after = state.copy()
+            after[0, rules.MODELLED] = 0
+            moves.append((p, int(action), after))
+        return moves, True
+
+    def _line_unless_beaten(self, root: np.ndarray, root_cp: int, searched: list[Move]) -> list[Move]:
+        """The ego on the racing line (the opponent model's own play for it) unless the searched lanes, played
+        out the same way at each lane's fastest legal speed, gain ``line_margin`` on the others over it.
+
+        The search's principal line is a visit count through a tree whose values differ by hundredths, and its
+        speed bins are sampled: read as a forecast it had the ego slower than its own line on straights and a
+        line follower a body length behind level with it, and the ego then gave up the racing line to
+        "defend" (fixed-lqng went round the outside of complex-reversed's first hairpin). Both candidates are
+        timed by the same deterministic playout, so the margin compares like with like."""
+        assert self.line_margin is not None
+        bins = len(self.tables.bin_low)
+        line, line_complete = self._playout(root, root_cp, None)
+        if not line_complete:
+            return searched
+        lanes = {int(state[0, rules.CHECKPOINT]): action // bins for mover, action, state in searched if mover == 0}
+        mine, complete = self._playout(root, root_cp, lanes)
+        if complete and _advantage(mine) >= _advantage(line) + self.line_margin * TIME_UNITS_PER_S:
+            return mine
+        return line
 
     def _pad(self, waypoints: list[Waypoint], root_cp: int, root_lane: int) -> int:
         """Fill the ego's plan to the horizon (a stuck ego: hold the lane at the lowest speed bin); returns how many
@@ -277,3 +345,12 @@ class TacticalPlanner:
             xy = self.track.lane_point(checkpoint, lane)
             point = self._lane_points[key] = (float(xy[0]), float(xy[1]))
         return point
+
+
+def _advantage(moves: list[Move]) -> float:
+    """The ego's (row 0) time advantage [0.01 s] over the mean of the others at the end of a playout (eq. (1)
+    gen_obj); 0 alone."""
+    final = moves[-1][2] if moves else None
+    if final is None or final.shape[0] == 1:
+        return 0.0
+    return float(final[1:, rules.TIME].mean() - final[0, rules.TIME])
