@@ -349,8 +349,10 @@ class TacticalPlanner:
 
 def _advantage(moves: list[Move]) -> float:
     """The ego's (row 0) time advantage [0.01 s] over the mean of the others at the end of a playout (eq. (1)
-    gen_obj); 0 alone."""
-    final = moves[-1][2] if moves else None
-    if final is None or final.shape[0] == 1:
-        return 0.0
+    gen_obj); alone, its own time's negative (the faster the better)."""
+    if not moves:
+        return float("-inf")
+    final = moves[-1][2]
+    if final.shape[0] == 1:
+        return float(-final[0, rules.TIME])
     return float(final[1:, rules.TIME].mean() - final[0, rules.TIME])

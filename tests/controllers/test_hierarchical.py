@@ -15,7 +15,7 @@ from controllers.base import RaceContext
 from controllers.plan import Plan, Waypoint
 from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import BEHIND_WINDOW, INTERACTION_WINDOW, MCTSPlanner, _lanes_legal
-from sim_core.observation import observe
+from sim_core.observation import KartView, Observation, observe
 from sim_core.params import PAPER_KART, SimParams
 from sim_core.track_io import get_track
 from sim_core.world import World
@@ -43,9 +43,10 @@ def _waypoints(lanes: list[int], first: int, times: list[float]) -> tuple[Waypoi
     gap=hs.floats(-2.0, 2.0),
     start_lane=hs.integers(1, 4),
     start_count=hs.integers(0, 4),
+    clear=hs.booleans(),
 )
 def test_snapping_to_the_line_never_breaks_the_lane_change_rule(
-    ego_lanes: list[int], other_lanes: list[int], gap: float, start_lane: int, start_count: int
+    ego_lanes: list[int], other_lanes: list[int], gap: float, start_lane: int, start_count: int, clear: bool
 ) -> None:
     me = replace(OBSERVATION.me, lane=start_lane, lane_changes=start_count)
     limit = TRACK.lane_change_limit
@@ -56,19 +57,20 @@ def test_snapping_to_the_line_never_breaks_the_lane_change_rule(
         return  # the search only ever returns legal plans
     other = _waypoints(other_lanes, first, [t + gap for t in times])
     plan = Plan(0, first - 1, {0: ego, 1: other}, 50, 1, 0.0)
-    snapped = PLANNER._prefer_racing_line(plan, me.lane, me.lane_changes)
+    snapped = PLANNER._prefer_racing_line(plan, me.lane, me.lane_changes, frozenset({1}) if clear else frozenset())
     out = list(snapped.ego_waypoints)
     assert _lanes_legal(TRACK, me.lane, me.lane_changes, out, limit)
     assert snapped.waypoints[1] == other  # predictions untouched
-    for before, after in zip(ego, out, strict=True):
+    for before, after, theirs in zip(ego, out, other, strict=True):
         assert after.checkpoint == before.checkpoint
         # a planned speed is kept behind another kart, else the line's speed profile binds (top speed)
-        kart_ahead = -INTERACTION_WINDOW < gap <= 0.0
+        kart_ahead = -INTERACTION_WINDOW < theirs.time - before.time <= 0.0
         assert after.speed == before.speed or (after.speed == PAPER_KART.top_speed and not kart_ahead)
         if after.lane != before.lane:
-            # only moved onto the line's lane, and only where no other kart is predicted close in time
+            # only moved onto the line's lane, and only where no other kart is predicted close in time (a kart
+            # clear behind now counts only when predicted ahead)
             assert after.lane == PLANNER._line_lanes[after.checkpoint % TRACK.n_checkpoints]
-            assert not -INTERACTION_WINDOW < gap < BEHIND_WINDOW
+            assert not -INTERACTION_WINDOW < theirs.time - before.time < (0.0 if clear else BEHIND_WINDOW)
             assert np.allclose(after.position, TRACK.lane_point(after.checkpoint, after.lane))
 
 
@@ -188,3 +190,52 @@ def test_a_leader_clear_of_the_kart_behind_may_cross_in_front_of_it() -> None:
         other = replace(mover, speed=6.0, heading=along, progress=mover.progress + gap)
         out = planner._no_squeeze(plan, me, (ego, other))
         assert (out.ego_waypoints[0].lane == me.lane) == squeezed, gap
+
+
+def _view_at(track, index: int, progress: float, lane: int, speed: float, passed: int) -> KartView:  # type: ignore[no-untyped-def]
+    """A kart on ``track`` at ``progress`` in ``lane``'s offset at its last checkpoint, heading along the centre
+    line."""
+    lateral = float(track.lane_offsets(passed)[lane - 1])
+    point, tangent = track.point_at(progress)
+    x, y = point + lateral * np.array([-tangent[1], tangent[0]])
+    heading = math.atan2(float(tangent[1]), float(tangent[0]))
+    return KartView(
+        index, float(x), float(y), heading, speed, progress, lateral, 0.25, passed, lane, 0, 0.0, speed, 0.25, False
+    )
+
+
+def test_a_kart_is_clear_behind_only_past_half_a_body_length() -> None:
+    """Overlapping by more than half a body length (or ahead) a kart is racing the ego for the corner; further
+    back, or a lap down, it is a follower whose duty it is to keep its distance (eqs. (8)-(9))."""
+    body_length = 2.0 * (PAPER_KART.body_half_length + PAPER_KART.body_radius)
+    s = float(TRACK.checkpoint_s[5]) + 4.0
+    me = _view_at(TRACK, 0, s, 2, 12.0, 5)
+    for gap, passed, clear in (
+        (3.0, 5, False),
+        (-0.4 * body_length, 5, False),
+        (-0.6 * body_length, 5, True),
+        (-8.0, 5, True),
+        (0.0, 5 - TRACK.n_checkpoints, True),
+    ):
+        other = _view_at(TRACK, 1, s + gap, 3, 12.0, passed)
+        observation = Observation(10.0, 0, (me, other), np.zeros(9), np.zeros(9, dtype=np.int64))
+        assert (1 in PLANNER._clear_behind(observation)) == clear, gap
+
+
+def test_a_leader_a_body_length_ahead_takes_the_racing_line_into_the_corner() -> None:
+    """The race of seed 0 on complex-reversed (session 11), 7.1 s in: leading by 1.9 m into the first hairpin
+    with a line follower behind and to its right, the game read the follower as level (its speed bins) and
+    sent the ego away from the line's lane 2 at checkpoint 10 (the corner's entry) in some seeds; in the race
+    it went down the inside, and the follower went round the outside and won. Clear ahead, the leader takes
+    the line's lanes into and through the corner, whatever the seed."""
+    track = get_track("complex-reversed")
+    line_lanes = None
+    for seed in range(4):
+        planner = MCTSPlanner()
+        planner.reset(RaceContext(track, PAPER_KART, 0, 2, track.lane_change_limit, seed))
+        line_lanes = planner._line_lanes
+        me = replace(_view_at(track, 0, 79.6, 3, 14.8, 7), lateral=-2.37, lane_changes=1)
+        follower = replace(_view_at(track, 1, 77.7, 4, 13.33, 7), lateral=-4.55, lane_changes=1)
+        observation = Observation(7.1, 0, (me, follower), np.zeros(9), np.zeros(9, dtype=np.int64))
+        lanes = {w.checkpoint: w.lane for w in planner.plan(observation).ego_waypoints}
+        assert [lanes[c] for c in (10, 11, 12)] == [line_lanes[c] for c in (10, 11, 12)], seed

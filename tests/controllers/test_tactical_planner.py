@@ -12,6 +12,7 @@ from hypothesis import strategies as hs
 from controllers.racing_line import optimise_racing_line
 from controllers.tactical import rules
 from controllers.tactical.exact import optimal_first_moves, random_small_games
+from controllers.tactical.game import GameParams
 from controllers.tactical.mcts import SearchTree
 from controllers.tactical.planner import DEFAULT_EXPLORATION, DEFAULT_GREEDY, PlayerState, TacticalPlanner
 from sim_core.params import PAPER_KART
@@ -174,3 +175,43 @@ def test_replanning_from_the_same_root_grows_the_same_tree() -> None:
     # and the sequence of plans is reproducible
     again = TacticalPlanner(track, PAPER_KART, iterations=1000, seed=3)
     assert [again.plan(players, 0).waypoints, again.plan(players, 0).waypoints] == [first.waypoints, second.waypoints]
+
+
+def test_alone_with_a_line_margin_the_plan_is_the_racing_line() -> None:
+    """From every checkpoint of the oval at the line's speed, alone: no lane of the search gains 0.1 s on the
+    line, so the plan is the line's lanes (without the margin the search's own lanes differ from it at some
+    checkpoints: its values differ by hundredths)."""
+    track = TRACKS["oval"]
+    line = optimise_racing_line(track, PAPER_KART)
+    lanes = line.checkpoint_lanes
+    n = track.n_checkpoints
+    differ = 0
+    for cp in range(n, 2 * n):
+        me = PlayerState(0, cp, lanes[cp % n], float(line.speed_at(float(track.checkpoint_s[cp % n]))), 0.0, 0.25, 0)
+        want = [lanes[c % n] for c in range(cp + 1, cp + 1 + GameParams().horizon)]
+        for margin in (0.1, None):
+            planner = TacticalPlanner(track, PAPER_KART, iterations=300, seed=cp, line=line, line_margin=margin)
+            got = [w.lane for w in planner.plan([me], 0).ego_waypoints]
+            if margin is not None:
+                assert got == want, cp
+            else:
+                differ += got != want
+    assert differ > 0
+
+
+def test_a_kart_behind_a_slower_one_on_the_line_leaves_the_line_to_pass() -> None:
+    """0.3 s behind a line follower doing 8 m/s on the oval's back straight, at 14 m/s: staying on the line
+    means braking behind it, so the searched lanes gain more than the margin and replace the line's."""
+    track = TRACKS["oval"]
+    line = optimise_racing_line(track, PAPER_KART)
+    lanes = line.checkpoint_lanes
+    me = PlayerState(0, 10, lanes[10], 14.0, 0.3, 0.25, 0)
+    slow = PlayerState(1, 10, lanes[10], 8.0, 0.0, 0.25, 0, modelled=True)
+    planner = TacticalPlanner(track, PAPER_KART, iterations=2000, seed=1, line=line, line_margin=0.1)
+    root, _ = planner.root_state([me, slow], 0)
+    following, complete = planner._playout(root, 10, None)
+    assert complete
+    plan = planner.plan([me, slow], 0)
+    assert plan.ego_waypoints[0].lane != lanes[11]
+    followed = [s for mover, _, s in following if mover == 0][-1]
+    assert plan.ego_waypoints[-1].time * 100.0 <= followed[0, rules.TIME] - 10
