@@ -28,7 +28,7 @@ from controllers.hierarchical import HierarchicalController
 from controllers.parameters import parameter
 from controllers.rl.tracker import RLTracker
 from controllers.tactical.game import GameParams
-from controllers.tactical.high_level import MCTSPlanner
+from controllers.tactical.high_level import DEVIATION_GAIN, DEVIATION_GAIN_HELP, MCTSPlanner
 from sim_core.observation import Observation
 
 RL_RATE_HZ = 50.0  # called every step; the tracker itself decides at 25 Hz and holds its action
@@ -64,6 +64,7 @@ class MCTSRLParams:
         minimum=0,
         maximum=4,
     )
+    deviation_gain_s: float = parameter(DEVIATION_GAIN, DEVIATION_GAIN_HELP, unit="s", minimum=0.0, maximum=5.0)
     deterministic: bool = parameter(
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
@@ -118,6 +119,7 @@ def build_mcts_rl(params: MCTSRLParams) -> Controller:
         rate_hz=params.planner_rate_hz,
         params=GameParams(horizon=params.horizon),
         lane_change_slack=params.lane_change_slack,
+        deviation_gain=params.deviation_gain_s,
     )
     return HierarchicalController(
         "mcts-rl",

@@ -28,7 +28,11 @@ INTERACTION_WINDOW = 1.0  # [s] another kart predicted at a checkpoint this much
 # [s] ... or this much later: a kart behind by more than about a kart length cannot be blocked without losing
 # time (it must keep its distance, the follower's duty), so a leader defends by driving the racing line
 BEHIND_WINDOW = 0.15
-LINE_MARGIN = 0.1  # [s] default of MCTSPlanner.line_margin
+DEVIATION_GAIN = 0.1  # [s] default of MCTSPlanner.deviation_gain
+DEVIATION_GAIN_HELP = (
+    "time the searched lanes must gain on the others over the racing line's to replace it, both played out the "
+    "same deterministic way (ours, not the paper's: the search's principal line is too noisy to read as a forecast)"
+)
 MAX_SQUEEZE_LOOKAHEAD = (
     2.0  # [s] how far ahead a kart alongside is extrapolated sideways (:meth:`MCTSPlanner._no_squeeze`)
 )
@@ -65,12 +69,12 @@ class MCTSPlanner:
         params: GameParams | None = None,
         racing_line: bool = True,
         lane_change_slack: int = 0,
-        line_margin: float | None = LINE_MARGIN,
+        deviation_gain: float | None = DEVIATION_GAIN,
     ) -> None:
         if lane_change_slack < 0:
             raise ValueError("lane_change_slack must be >= 0")
-        if line_margin is not None and line_margin < 0:
-            raise ValueError("line_margin must be >= 0 (or None)")
+        if deviation_gain is not None and deviation_gain < 0:
+            raise ValueError("deviation_gain must be >= 0 (or None)")
         self.iterations = iterations
         self.rate_hz = rate_hz
         self.params = params or GameParams()
@@ -80,7 +84,7 @@ class MCTSPlanner:
         self.lane_change_slack = lane_change_slack
         # [s] with the racing line on, the searched lanes replace the line's only when the game's playout of
         # them gains this much (:meth:`TacticalPlanner._line_unless_beaten`); None: the search's lanes always
-        self.line_margin = line_margin
+        self.deviation_gain = deviation_gain
         self._planner: TacticalPlanner | None = None
         self._context: RaceContext | None = None
         self._line_lanes: tuple[int, ...] = ()
@@ -107,7 +111,7 @@ class MCTSPlanner:
             seed=context.seed,
             lane_limit=self.lane_limit,
             line=self._line,
-            line_margin=self.line_margin if self.racing_line else None,
+            deviation_gain=self.deviation_gain if self.racing_line else None,
         )
 
     def present_state(self, kart: KartView, now: float, ego: int) -> PlayerState:

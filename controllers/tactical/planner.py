@@ -60,13 +60,13 @@ class TacticalPlanner:
         greedy: float = DEFAULT_GREEDY,
         lane_limit: int | None = None,
         line: RacingLine | None = None,
-        line_margin: float | None = None,
+        deviation_gain: float | None = None,
     ) -> None:
-        if line_margin is not None and line is None:
-            raise ValueError("line_margin needs the racing line")
+        if deviation_gain is not None and line is None:
+            raise ValueError("deviation_gain needs the racing line")
         self.track = track
         # [s] the searched lanes replace the racing line's only when they gain this much over it (None: always)
-        self.line_margin = line_margin
+        self.deviation_gain = deviation_gain
         self.params = params or GameParams()
         self.tables: GameTables = build_tables(track, kart, self.params, lane_limit)
         if line is not None:
@@ -245,7 +245,7 @@ class TacticalPlanner:
                 continue
             rules.apply_move(tb, replay, int(mover), int(action))
             moves.append((int(mover), int(action), replay.copy()))
-        if self.line_margin is not None:
+        if self.deviation_gain is not None:
             moves = self._line_unless_beaten(tree.state[0], root_cp, moves)
         for mover, action, states in moves:
             lane, vbin = divmod(action, bins)
@@ -303,21 +303,21 @@ class TacticalPlanner:
 
     def _line_unless_beaten(self, root: np.ndarray, root_cp: int, searched: list[Move]) -> list[Move]:
         """The ego on the racing line (the opponent model's own play for it) unless the searched lanes, played
-        out the same way at each lane's fastest legal speed, gain ``line_margin`` on the others over it.
+        out the same way at each lane's fastest legal speed, gain ``deviation_gain`` on the others over it.
 
         The search's principal line is a visit count through a tree whose values differ by hundredths, and its
         speed bins are sampled: read as a forecast it had the ego slower than its own line on straights and a
         line follower a body length behind level with it, and the ego then gave up the racing line to
         "defend" (fixed-lqng went round the outside of complex-reversed's first hairpin). Both candidates are
         timed by the same deterministic playout, so the margin compares like with like."""
-        assert self.line_margin is not None
+        assert self.deviation_gain is not None
         bins = len(self.tables.bin_low)
         line, line_complete = self._playout(root, root_cp, None)
         if not line_complete:
             return searched
         lanes = {int(state[0, rules.CHECKPOINT]): action // bins for mover, action, state in searched if mover == 0}
         mine, complete = self._playout(root, root_cp, lanes)
-        if complete and _advantage(mine) >= _advantage(line) + self.line_margin * TIME_UNITS_PER_S:
+        if complete and _advantage(mine) >= _advantage(line) + self.deviation_gain * TIME_UNITS_PER_S:
             return mine
         return line
 

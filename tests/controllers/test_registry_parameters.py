@@ -53,17 +53,21 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
         "horizon": "8",
         "planner_rate_hz": "1.0",
         "lqng_horizon_steps": "4",
+        "deviation_gain_s": "0.1",
     }
     assert dict(REGISTRY["fixed-lqng"].parameters) == {"line_margin_m": "1.0", "lqng_horizon_steps": "4"}
 
 
 def test_overrides_reach_the_parts_that_use_them() -> None:
-    driver = make_controller("mcts-lqng", iterations=300, horizon=5, planner_rate_hz=2, lqng_horizon_steps=6)
+    driver = make_controller(
+        "mcts-lqng", iterations=300, horizon=5, planner_rate_hz=2, lqng_horizon_steps=6, deviation_gain_s=0.3
+    )
     assert isinstance(driver, HierarchicalController)
     assert isinstance(driver.planner, MCTSPlanner) and isinstance(driver.tracker, LQNGTracker)
     assert driver.planner.iterations == 300 and driver.planner.params.horizon == 5
     assert driver.planner.rate_hz == 2.0 and isinstance(driver.planner.rate_hz, float)
     assert driver.tracker.params.horizon == 6
+    assert driver.planner.deviation_gain == 0.3
     fixed = make_controller("fixed-lqng", line_margin_m=1.5)
     assert isinstance(fixed, HierarchicalController) and isinstance(fixed.planner, FixedLinePlanner)
     assert fixed.planner.margin == 1.5

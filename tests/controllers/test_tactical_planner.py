@@ -190,7 +190,7 @@ def test_alone_with_a_line_margin_the_plan_is_the_racing_line() -> None:
         me = PlayerState(0, cp, lanes[cp % n], float(line.speed_at(float(track.checkpoint_s[cp % n]))), 0.0, 0.25, 0)
         want = [lanes[c % n] for c in range(cp + 1, cp + 1 + GameParams().horizon)]
         for margin in (0.1, None):
-            planner = TacticalPlanner(track, PAPER_KART, iterations=300, seed=cp, line=line, line_margin=margin)
+            planner = TacticalPlanner(track, PAPER_KART, iterations=300, seed=cp, line=line, deviation_gain=margin)
             got = [w.lane for w in planner.plan([me], 0).ego_waypoints]
             if margin is not None:
                 assert got == want, cp
@@ -207,7 +207,7 @@ def test_a_kart_behind_a_slower_one_on_the_line_leaves_the_line_to_pass() -> Non
     lanes = line.checkpoint_lanes
     me = PlayerState(0, 10, lanes[10], 14.0, 0.3, 0.25, 0)
     slow = PlayerState(1, 10, lanes[10], 8.0, 0.0, 0.25, 0, modelled=True)
-    planner = TacticalPlanner(track, PAPER_KART, iterations=2000, seed=1, line=line, line_margin=0.1)
+    planner = TacticalPlanner(track, PAPER_KART, iterations=2000, seed=1, line=line, deviation_gain=0.1)
     root, _ = planner.root_state([me, slow], 0)
     following, complete = planner._playout(root, 10, None)
     assert complete
