@@ -52,7 +52,12 @@ from controllers.lq.tracker import FIXED_LINE_TRACKING, MCTS_TRACKING, LQNGTrack
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
 from controllers.rl.agents import E2EParams, FixedRLParams, MCTSRLParams, build_e2e, build_fixed_rl, build_mcts_rl
 from controllers.tactical.game import GameParams
-from controllers.tactical.high_level import DEVIATION_GAIN, DEVIATION_GAIN_HELP, MCTSPlanner
+from controllers.tactical.high_level import (
+    DEVIATION_GAIN,
+    DEVIATION_GAIN_HELP,
+    RACING_LINE_DEFAULT_HELP,
+    MCTSPlanner,
+)
 
 P = TypeVar("P")
 
@@ -106,6 +111,7 @@ class MCTSLQNGParams:
     horizon: int = parameter(8, "checkpoints the tactical game looks ahead", minimum=1, maximum=16)
     planner_rate_hz: float = parameter(1.0, "re-plans per second", unit="Hz", minimum=0.1, maximum=10.0)
     lqng_horizon_steps: int = parameter(4, "steps of 0.02 s the LQ game looks ahead", minimum=1, maximum=25)
+    racing_line_default: bool = parameter(True, RACING_LINE_DEFAULT_HELP)
     deviation_gain_s: float = parameter(DEVIATION_GAIN, DEVIATION_GAIN_HELP, unit="s", minimum=0.0, maximum=5.0)
 
 
@@ -125,7 +131,7 @@ def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
         iterations=params.iterations,
         rate_hz=params.planner_rate_hz,
         params=game,
-        deviation_gain=params.deviation_gain_s,
+        deviation_gain=params.deviation_gain_s if params.racing_line_default else None,
     )
     tracker = LQNGTracker(replace(MCTS_TRACKING, horizon=params.lqng_horizon_steps))
     return HierarchicalController("mcts-lqng", planner, tracker)

@@ -28,7 +28,12 @@ from controllers.hierarchical import HierarchicalController
 from controllers.parameters import parameter
 from controllers.rl.tracker import RLTracker
 from controllers.tactical.game import GameParams
-from controllers.tactical.high_level import DEVIATION_GAIN, DEVIATION_GAIN_HELP, MCTSPlanner
+from controllers.tactical.high_level import (
+    DEVIATION_GAIN,
+    DEVIATION_GAIN_HELP,
+    RACING_LINE_DEFAULT_HELP,
+    MCTSPlanner,
+)
 from sim_core.observation import Observation
 
 RL_RATE_HZ = 50.0  # called every step; the tracker itself decides at 25 Hz and holds its action
@@ -64,6 +69,11 @@ class MCTSRLParams:
         minimum=0,
         maximum=4,
     )
+    # off for mcts-rl: the game times every kart by one model of the kart, so it sees no pass on a line follower
+    # that the policy (4.6 s faster than fixed-lqng over a race on complex) has; with the line as the default
+    # plan it closed up behind and hit the other kart (0.65 collisions at fault per race against fixed-lqng on
+    # complex, session 12, against 0.30 with the search's lanes)
+    racing_line_default: bool = parameter(False, RACING_LINE_DEFAULT_HELP)
     deviation_gain_s: float = parameter(DEVIATION_GAIN, DEVIATION_GAIN_HELP, unit="s", minimum=0.0, maximum=5.0)
     deterministic: bool = parameter(
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
@@ -119,7 +129,7 @@ def build_mcts_rl(params: MCTSRLParams) -> Controller:
         rate_hz=params.planner_rate_hz,
         params=GameParams(horizon=params.horizon),
         lane_change_slack=params.lane_change_slack,
-        deviation_gain=params.deviation_gain_s,
+        deviation_gain=params.deviation_gain_s if params.racing_line_default else None,
     )
     return HierarchicalController(
         "mcts-rl",

@@ -29,6 +29,10 @@ INTERACTION_WINDOW = 1.0  # [s] another kart predicted at a checkpoint this much
 # time (it must keep its distance, the follower's duty), so a leader defends by driving the racing line
 BEHIND_WINDOW = 0.15
 DEVIATION_GAIN = 0.1  # [s] default of MCTSPlanner.deviation_gain
+RACING_LINE_DEFAULT_HELP = (
+    "the racing line is the plan unless the searched lanes gain deviation_gain_s on it; off: the search's lanes "
+    "(ours, not the paper's)"
+)
 DEVIATION_GAIN_HELP = (
     "time the searched lanes must gain on the others over the racing line's to replace it, both played out the "
     "same deterministic way (ours, not the paper's: the search's principal line is too noisy to read as a forecast)"

@@ -53,6 +53,7 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
         "horizon": "8",
         "planner_rate_hz": "1.0",
         "lqng_horizon_steps": "4",
+        "racing_line_default": "True",
         "deviation_gain_s": "0.1",
     }
     assert dict(REGISTRY["fixed-lqng"].parameters) == {"line_margin_m": "1.0", "lqng_horizon_steps": "4"}
@@ -68,6 +69,12 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
     assert driver.planner.rate_hz == 2.0 and isinstance(driver.planner.rate_hz, float)
     assert driver.tracker.params.horizon == 6
     assert driver.planner.deviation_gain == 0.3
+    searched = make_controller("mcts-lqng", racing_line_default=False)
+    assert isinstance(searched, HierarchicalController) and isinstance(searched.planner, MCTSPlanner)
+    assert searched.planner.deviation_gain is None  # the search's lanes, as mcts-rl's by default
+    rl = make_controller("mcts-rl")
+    assert isinstance(rl, HierarchicalController) and isinstance(rl.planner, MCTSPlanner)
+    assert rl.planner.deviation_gain is None
     fixed = make_controller("fixed-lqng", line_margin_m=1.5)
     assert isinstance(fixed, HierarchicalController) and isinstance(fixed.planner, FixedLinePlanner)
     assert fixed.planner.margin == 1.5
