@@ -74,6 +74,7 @@ class MCTSPlanner:
         racing_line: bool = True,
         lane_change_slack: int = 0,
         deviation_gain: float | None = DEVIATION_GAIN,
+        planned_speeds_behind: bool = True,
     ) -> None:
         if lane_change_slack < 0:
             raise ValueError("lane_change_slack must be >= 0")
@@ -89,6 +90,10 @@ class MCTSPlanner:
         # [s] with the racing line on, the searched lanes replace the line's only when the game's playout of
         # them gains this much (:meth:`TacticalPlanner._line_unless_beaten`); None: the search's lanes always
         self.deviation_gain = deviation_gain
+        # behind another kart a waypoint keeps the game's planned speed: the spacing of a tracker that keeps none
+        # of its own (LQNG); off, the line's speed profile binds everywhere and the tracker keeps its distance
+        # (the RL trackers' following shield)
+        self.planned_speeds_behind = planned_speeds_behind
         self._planner: TacticalPlanner | None = None
         self._context: RaceContext | None = None
         self._line_lanes: tuple[int, ...] = ()
@@ -264,7 +269,8 @@ class MCTSPlanner:
         self, plan: Plan, lane: int, count: int, clear_behind: frozenset[int] = frozenset()
     ) -> Plan:
         """``plan`` with every non-tactical ego waypoint moved to the racing line's lane where that is legal,
-        and every waypoint with no kart ahead at top speed (the tracker then drives the line's speed profile).
+        and every waypoint with no kart ahead (or every waypoint, with ``planned_speeds_behind`` off) at top speed
+        (the tracker then drives the line's speed profile).
 
         A waypoint is tactical when another kart is predicted at its checkpoint up to ``INTERACTION_WINDOW``
         before the ego, or up to ``BEHIND_WINDOW`` after it unless that kart is ``clear_behind`` now: the game's
@@ -288,7 +294,7 @@ class MCTSPlanner:
             behind = any(
                 o.checkpoint == w.checkpoint and -INTERACTION_WINDOW < o.time - w.time <= 0.0 for o, _ in opponents
             )
-            if not behind:
+            if not behind or not self.planned_speeds_behind:
                 # nobody ahead to keep a distance from: the racing line's speed profile (the tracker's) binds,
                 # not the game's coarse speed bins
                 waypoints[i] = w = replace(w, speed=self._context.kart.top_speed)

@@ -239,3 +239,21 @@ def test_a_leader_a_body_length_ahead_takes_the_racing_line_into_the_corner() ->
         observation = Observation(7.1, 0, (me, follower), np.zeros(9), np.zeros(9, dtype=np.int64))
         lanes = {w.checkpoint: w.lane for w in planner.plan(observation).ego_waypoints}
         assert [lanes[c] for c in (10, 11, 12)] == [line_lanes[c] for c in (10, 11, 12)], seed
+
+
+def test_without_planned_speeds_behind_every_waypoint_takes_the_lines_speed_profile() -> None:
+    """Behind another kart the game's speed bins are the LQNG tracker's spacing, kept by default; a planner for a
+    tracker that keeps its own distance (the RL following shield) sends top speed everywhere instead."""
+    me = OBSERVATION.me
+    first = me.checkpoints_passed + 1
+    times = [0.8 * (i + 1) for i in range(8)]
+    ego = _waypoints([2] * 8, first, times)
+    ahead = _waypoints([2] * 8, first, [t - 0.3 for t in times])
+    plan = Plan(0, first - 1, {0: ego, 1: ahead}, 50, 1, 0.0)
+    kept = PLANNER._prefer_racing_line(plan, me.lane, me.lane_changes)
+    assert all(w.speed == 12.0 for w in kept.ego_waypoints)
+    free = MCTSPlanner(iterations=50, planned_speeds_behind=False)
+    free.reset(RaceContext(TRACK, PAPER_KART, 0, 2, TRACK.lane_change_limit, 0))
+    out = free._prefer_racing_line(plan, me.lane, me.lane_changes)
+    assert all(w.speed == PAPER_KART.top_speed for w in out.ego_waypoints)
+    assert [w.lane for w in out.ego_waypoints] == [w.lane for w in kept.ego_waypoints]

@@ -75,6 +75,10 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
     rl = make_controller("mcts-rl")
     assert isinstance(rl, HierarchicalController) and isinstance(rl.planner, MCTSPlanner)
     assert rl.planner.deviation_gain is None
+    assert not rl.planner.planned_speeds_behind  # its following shield keeps the distance
+    unshielded = make_controller("mcts-rl", keep_distance=False)
+    assert isinstance(unshielded, HierarchicalController) and isinstance(unshielded.planner, MCTSPlanner)
+    assert unshielded.planner.planned_speeds_behind
     fixed = make_controller("fixed-lqng", line_margin_m=1.5)
     assert isinstance(fixed, HierarchicalController) and isinstance(fixed.planner, FixedLinePlanner)
     assert fixed.planner.margin == 1.5
