@@ -46,6 +46,11 @@ class KartParams:
     # A wall turns the body toward its tangent no faster than this (the kart slides along it meanwhile).
     wall_yaw_rate: float = 3.0  # [rad/s]
 
+    @property
+    def body_length(self) -> float:
+        """[m] nose to tail of the capsule body."""
+        return 2.0 * (self.body_half_length + self.body_radius)
+
     def lateral_limit(self, wear: float | np.ndarray) -> float | np.ndarray:
         """Lateral acceleration limit [m/s^2] for a tyre-wear proportion in [0, 1]."""
         grip_g = self.lateral_g_worn + (1.0 - np.clip(wear, 0.0, 1.0)) * (self.lateral_g_fresh - self.lateral_g_worn)

@@ -184,6 +184,11 @@ class Track:
         return int(np.argmin(np.abs(self._lane_offsets_at_sample(i) - d))) + 1
 
     # ----------------------------------------------------------------- centre line queries
+    def gap(self, s_from: float, s_to: float) -> float:
+        """[m] how far ``s_to`` lies ahead of ``s_from`` along the centre line (negative: behind), the nearer way
+        round the lap: in [-length / 2, length / 2)."""
+        return (s_to - s_from + 0.5 * self.length) % self.length - 0.5 * self.length
+
     def point_at(self, s: float) -> tuple[np.ndarray, np.ndarray]:
         """(position, unit tangent) on the centre line at arc length ``s`` [m] (wraps)."""
         s = s % self.length

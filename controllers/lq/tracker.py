@@ -202,11 +202,7 @@ class LQNGTracker:
         others = [k for k in observation.others() if math.hypot(k.x - me.x, k.y - me.y) < w.avoid_radius]
         players = [me, *others]
         tolerance = self.params.traffic_lane_tolerance if others else self.params.lane_tolerance
-        length = track.length
-        if any(
-            abs((k.progress - me.progress + 0.5 * length) % length - 0.5 * length) < self.params.alongside_distance
-            for k in others
-        ):
+        if any(abs(track.gap(me.progress, k.progress)) < self.params.alongside_distance for k in others):
             tolerance = 0.0
         A, B = linearised_dynamics(players, DT)
         x0 = np.zeros(STATE_SIZE * len(players))

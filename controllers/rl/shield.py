@@ -106,7 +106,7 @@ class FollowingShield:
         """The shield for ``kart``: standoffs of a body length plus the rules' buffers (eqs. (8)-(9)
         gen_coll_avoid: s1 directly behind, s0 otherwise), a clearance of a body width plus 0.3 m."""
         rules = rules or RuleParams()
-        length = 2.0 * (kart.body_half_length + kart.body_radius)
+        length = kart.body_length
         width = 2.0 * kart.body_radius
         return cls(
             kart.as_array(),
@@ -120,13 +120,12 @@ class FollowingShield:
 
     def allowed_speed(self, me: KartView, others: Iterable[KartView], track: Track) -> float:
         """The highest speed [m/s] the ego may drive now (infinite when nobody is in its path)."""
-        length = track.length
         allowed = math.inf
         _, my_sideways = _track_velocity(me, track)
         for other in others:
             if other.index == me.index or other.finished:
                 continue
-            gap = (other.progress - me.progress + 0.5 * length) % length - 0.5 * length
+            gap = track.gap(me.progress, other.progress)
             if not 0.0 < gap < self.reach:
                 continue
             along, sideways = _track_velocity(other, track)

@@ -181,11 +181,11 @@ class MCTSPlanner:
         reach_time = min(((s_first - here.progress) % track.length) / max(here.speed, 1.0), MAX_SQUEEZE_LOOKAHEAD)
         target = float(track.lane_offsets(first.checkpoint)[first.lane - 1])
         kart = self._context.kart
-        body_length = 2.0 * (kart.body_half_length + kart.body_radius)
+        body_length = kart.body_length
         for other in karts:
             if other.index == me.kart or other.finished:
                 continue
-            gap = (other.progress - here.progress + 0.5 * track.length) % track.length - 0.5 * track.length
+            gap = track.gap(here.progress, other.progress)
             side = other.lateral - here.lateral  # > 0: it is on my left
             # ahead: anything within the collision distance is ours to avoid; behind: only a kart still
             # overlapping us, since a follower clear of our tail must keep its distance (and crossing in front
@@ -248,19 +248,19 @@ class MCTSPlanner:
         return replace(plan, waypoints={**plan.waypoints, plan.ego: (*filled, *plan.ego_waypoints)})
 
     def _clear_behind(self, observation: Observation) -> frozenset[int]:
-        """The karts now behind the ego with no body overlap: followers whose duty it is to keep their distance
-        (eqs. (8)-(9) gen_coll_avoid), so the ego leads them on the racing line whatever the game predicts."""
+        """The karts now behind the ego by more than half a body length (their nose behind its middle), or a lap
+        down: followers whose duty it is to keep their distance (eqs. (8)-(9) gen_coll_avoid), so the ego leads
+        them on the racing line whatever the game predicts."""
         assert self._context is not None
         track = self._context.track
-        kart = self._context.kart
-        body_length = 2.0 * (kart.body_half_length + kart.body_radius)
+        body_length = self._context.kart.body_length
         me = next(k for k in observation.karts if k.index == observation.ego)
         clear = set()
         for other in observation.karts:
             if other.index == observation.ego or other.finished:
                 continue
             checkpoints_ahead = me.checkpoints_passed - other.checkpoints_passed
-            gap = (other.progress - me.progress + 0.5 * track.length) % track.length - 0.5 * track.length
+            gap = track.gap(me.progress, other.progress)
             if checkpoints_ahead >= track.n_checkpoints or (gap < -0.5 * body_length and checkpoints_ahead >= 0):
                 clear.add(other.index)
         return frozenset(clear)

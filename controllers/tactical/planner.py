@@ -14,7 +14,7 @@ from controllers.racing_line import RacingLine
 from controllers.tactical import rules
 from controllers.tactical.calibration import calibrate_tables
 from controllers.tactical.game import TIME_UNITS_PER_S, WEAR_UNITS, GameParams, GameTables, build_tables
-from controllers.tactical.mcts import SearchTree, fastest_outcome, greedy_line
+from controllers.tactical.mcts import SearchTree, fastest_outcome
 from sim_core.params import KartParams
 from sim_core.track import Track
 
@@ -235,16 +235,8 @@ class TacticalPlanner:
             (int(tree.mover[tree.parent[node]]), int(tree.action[node]), tree.state[node]) for node in path[1:]
         ]
         # beyond the searched tree the plan continues with everyone's fastest legal moves
-        state = tree.state[path[-1]].copy()
-        tail = np.zeros((len(karts) * self.params.horizon, 2), dtype=np.int64)
-        played = greedy_line(tb, state, int(tree.round[path[-1]]), root_cp + self.params.horizon, tail)
-        replay = tree.state[path[-1]].copy()
-        for mover, action in tail[:played]:
-            if action < 0:
-                replay[mover, rules.CHECKPOINT] = -1  # stuck: left the game
-                continue
-            rules.apply_move(tb, replay, int(mover), int(action))
-            moves.append((int(mover), int(action), replay.copy()))
+        tail, _ = self._playout(tree.state[path[-1]], int(tree.round[path[-1]]), root_cp, {})
+        moves += tail
         if self.deviation_gain is not None:
             moves = self._line_unless_beaten(tree.state[0], root_cp, moves)
         for mover, action, states in moves:
@@ -264,20 +256,24 @@ class TacticalPlanner:
         waypoints = {k: tuple(w) for k, w in per_player.items()}
         return Plan(ego, root_cp, waypoints, iterations, tree.size, seconds, padded)
 
-    def _playout(self, root: np.ndarray, root_cp: int, ego_lanes: dict[int, int] | None) -> tuple[list[Move], bool]:
-        """(moves, complete) of the game played out from ``root`` to the horizon with no search: every other
-        player its model's move (:func:`~controllers.tactical.mcts.fastest_outcome`), the ego its fastest legal
-        move into ``ego_lanes[checkpoint]`` (0-based lanes; beyond them its fastest legal move anywhere), or with
-        ``ego_lanes`` None the racing line's lane as a modelled player. ``complete``: the ego reached the
-        horizon (a lane given with no legal move there, or no move at all, stops the playout)."""
+    def _playout(
+        self, start: np.ndarray, start_round: int, root_cp: int, ego_lanes: dict[int, int] | None
+    ) -> tuple[list[Move], bool]:
+        """(moves, complete) of the game played on from ``start`` (its round ``start_round``) to the horizon of
+        the root at ``root_cp`` with no search: every other player its model's move
+        (:func:`~controllers.tactical.mcts.fastest_outcome`; an unmodelled one its fastest legal move), the ego its
+        fastest legal move into ``ego_lanes[checkpoint]`` (0-based lanes; elsewhere its fastest legal move
+        anywhere), or with ``ego_lanes`` None the racing line's lane as a modelled player. A stuck opponent leaves
+        the game; ``complete``: the ego reached the horizon (a lane given with no legal move there, or no move at
+        all, stops the playout)."""
         tb = self.tables
         bins = len(tb.bin_low)
         lanes = tb.distance.shape[1]
-        state = root.copy()
+        state = start.copy()
         state[0, rules.MODELLED] = int(ego_lanes is None)
         final = root_cp + self.params.horizon
         moves: list[Move] = []
-        r = root_cp
+        r = start_round
         while r < final:
             p = rules.next_player(state, r)
             if p == rules.NO_PLAYER:
@@ -293,7 +289,7 @@ class TacticalPlanner:
             if action < 0:
                 if p == 0:
                     return moves, False
-                state[p, rules.CHECKPOINT] = -1  # a stuck opponent leaves the game, as in the search's tail
+                state[p, rules.CHECKPOINT] = -1
                 continue
             rules.apply_outcome(tb, state, p, action // bins, action % bins, arrival, count)
             after = state.copy()
@@ -312,11 +308,11 @@ class TacticalPlanner:
         timed by the same deterministic playout, so the margin compares like with like."""
         assert self.deviation_gain is not None
         bins = len(self.tables.bin_low)
-        line, line_complete = self._playout(root, root_cp, None)
+        line, line_complete = self._playout(root, root_cp, root_cp, None)
         if not line_complete:
             return searched
         lanes = {int(state[0, rules.CHECKPOINT]): action // bins for mover, action, state in searched if mover == 0}
-        mine, complete = self._playout(root, root_cp, lanes)
+        mine, complete = self._playout(root, root_cp, root_cp, lanes)
         if complete and _advantage(mine) >= _advantage(line) + self.deviation_gain * TIME_UNITS_PER_S:
             return mine
         return line

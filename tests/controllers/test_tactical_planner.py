@@ -209,7 +209,7 @@ def test_a_kart_behind_a_slower_one_on_the_line_leaves_the_line_to_pass() -> Non
     slow = PlayerState(1, 10, lanes[10], 8.0, 0.0, 0.25, 0, modelled=True)
     planner = TacticalPlanner(track, PAPER_KART, iterations=2000, seed=1, line=line, deviation_gain=0.1)
     root, _ = planner.root_state([me, slow], 0)
-    following, complete = planner._playout(root, 10, None)
+    following, complete = planner._playout(root, 10, 10, None)
     assert complete
     plan = planner.plan([me, slow], 0)
     assert plan.ego_waypoints[0].lane != lanes[11]

@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from sim_core.params import PAPER_KART
 from sim_core.track import CENTRE_SAMPLE_SPACING, INNER_WALL_CURVATURE_MARGIN, Section, Track
 from sim_core.track_io import builtin_track_names, get_track
 
@@ -477,3 +478,14 @@ def test_a_reversed_track_has_its_own_description() -> None:
         assert backward.description.startswith("Driven the other way round")
         assert backward.reversed().description == forward.description
     assert "right-hand 90 deg corners" in get_track("oval-reversed").description
+
+
+def test_the_gap_along_the_track_takes_the_nearer_way_round_the_lap() -> None:
+    """Hand-checked on the oval: 10 m ahead, 10 m behind, and across the start line either way."""
+    track = get_track("oval")
+    length = track.length
+    assert track.gap(100.0, 110.0) == pytest.approx(10.0)
+    assert track.gap(110.0, 100.0) == pytest.approx(-10.0)
+    assert track.gap(length - 5.0, 3.0) == pytest.approx(8.0)  # just over the line: ahead
+    assert track.gap(3.0, length - 5.0) == pytest.approx(-8.0)
+    assert PAPER_KART.body_length == pytest.approx(2.0)  # the capsule: 2 x (0.55 + 0.45) m
