@@ -88,7 +88,10 @@ class FollowingShield:
     kart: np.ndarray  # the kart's packed parameters (sim_core.kart)
     standoff: float  # [m] centre-to-centre gap along the track kept to a kart ahead in the path, not level with it
     standoff_behind: float  # [m] ... and to a kart directly ahead (lateral centre distance under a body width)
-    clearance: float  # [m] lateral centre distance under which a kart ahead is in the path
+    clearance: float  # [m] lateral centre distance under which a kart ahead is in the path now
+    # [m] ... and under which it is in the path ``lookahead`` seconds on (the extrapolation is already a worst
+    # case, so only a small margin over the body width)
+    clearance_then: float
     width: float  # [m] the body's width
     braking: float  # [m/s^2] deceleration the allowed speed assumes
     lookahead: float = 0.0  # [s] how far ahead the karts' sideways motion is extrapolated
@@ -104,7 +107,8 @@ class FollowingShield:
         lookahead: float = 0.0,
     ) -> FollowingShield:
         """The shield for ``kart``: standoffs of a body length plus the rules' buffers (eqs. (8)-(9)
-        gen_coll_avoid: s1 directly behind, s0 otherwise), a clearance of a body width plus 0.3 m."""
+        gen_coll_avoid: s1 directly behind, s0 otherwise), a clearance of a body width plus 0.3 m now and plus
+        0.1 m ``lookahead`` seconds on."""
         rules = rules or RuleParams()
         length = kart.body_length
         width = 2.0 * kart.body_radius
@@ -113,6 +117,7 @@ class FollowingShield:
             length + rules.buffer_side,
             length + rules.buffer_behind,
             width + 0.3,
+            width + 0.1,
             width,
             braking_use * kart.braking,
             lookahead,
@@ -131,7 +136,8 @@ class FollowingShield:
             along, sideways = _track_velocity(other, track)
             lateral_now = other.lateral - me.lateral
             lateral_then = lateral_now + (sideways - my_sideways) * self.lookahead
-            if min(abs(lateral_now), abs(lateral_then)) >= self.clearance and lateral_now * lateral_then > 0.0:
+            clear_now = abs(lateral_now) >= self.clearance
+            if clear_now and abs(lateral_then) >= self.clearance_then and lateral_now * lateral_then > 0.0:
                 continue
             standoff = self.standoff_behind if abs(lateral_now) < self.width else self.standoff
             # inside the standoff already: slower than the other kart, to open the gap again

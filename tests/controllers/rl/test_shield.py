@@ -44,6 +44,20 @@ def test_on_a_straight_at_top_speed_the_ceiling_is_not_binding() -> None:
     assert SHIELD.ceiling(s) == pytest.approx(float(LINE.speed.max()) + 1.0, abs=0.3)
 
 
+def test_a_kart_that_stays_a_body_width_clear_of_the_path_is_passed_without_braking() -> None:
+    """1.25 m to the side now (over the 1.2 m clearance), drifting toward the ego: ignored while the extrapolated
+    lateral distance 0.8 s on stays over a body width plus 0.1 m (1.0 m), in the path once it falls under.
+    Holding the extrapolation to the 0.3 m margin of the present kept fixed-rl braking half alongside e2e, a
+    body width clear, for whole laps (session 13)."""
+    assert FOLLOW.clearance_then == pytest.approx(1.0)
+    looking = replace(FOLLOW, lookahead=0.8)
+    me = _view(0, 100.0, -0.625, 12.0)
+    for drift, in_path in ((0.25, False), (0.375, True)):
+        other = _view(1, 102.0, 0.625, 10.0, heading_offset=-math.asin(drift / 10.0))
+        allowed = looking.allowed_speed(me, [me, other], TRACK)
+        assert (allowed < math.inf) == in_path, drift
+
+
 @given(
     steer=st.floats(-1.0, 1.0),
     throttle=st.floats(-1.0, 1.0),
