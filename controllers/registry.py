@@ -55,6 +55,8 @@ from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import (
     DEVIATION_GAIN,
     DEVIATION_GAIN_HELP,
+    OWN_PACE_HELP,
+    PACE_MODEL_HELP,
     RACING_LINE_DEFAULT_HELP,
     MCTSPlanner,
 )
@@ -114,6 +116,9 @@ class MCTSLQNGParams:
     racing_line_default: bool = parameter(True, RACING_LINE_DEFAULT_HELP)
     deviation_gain_s: float = parameter(DEVIATION_GAIN, DEVIATION_GAIN_HELP, unit="s", minimum=0.0, maximum=5.0)
 
+    pace_model: bool = parameter(False, PACE_MODEL_HELP)
+    own_pace: float = parameter(1.0, OWN_PACE_HELP, minimum=0.8, maximum=1.3)
+
 
 @dataclass(frozen=True)
 class FixedLQNGParams:
@@ -132,6 +137,8 @@ def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
         rate_hz=params.planner_rate_hz,
         params=game,
         deviation_gain=params.deviation_gain_s if params.racing_line_default else None,
+        pace_model=params.pace_model,
+        own_pace=params.own_pace,
     )
     tracker = LQNGTracker(replace(MCTS_TRACKING, horizon=params.lqng_horizon_steps))
     return HierarchicalController("mcts-lqng", planner, tracker)

@@ -31,6 +31,8 @@ from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import (
     DEVIATION_GAIN,
     DEVIATION_GAIN_HELP,
+    OWN_PACE_HELP,
+    PACE_MODEL_HELP,
     RACING_LINE_DEFAULT_HELP,
     MCTSPlanner,
 )
@@ -69,12 +71,15 @@ class MCTSRLParams:
         minimum=0,
         maximum=4,
     )
-    # off for mcts-rl: the game times every kart by one model of the kart, so it sees no pass on a line follower
-    # that the policy (4.6 s faster than fixed-lqng over a race on complex) has; with the line as the default
-    # plan it closed up behind and hit the other kart (0.65 collisions at fault per race against fixed-lqng on
-    # complex, session 12, against 0.30 with the search's lanes)
-    racing_line_default: bool = parameter(False, RACING_LINE_DEFAULT_HELP)
+    # the racing line unless the search gains, with every kart timed at its measured pace: the search's own lanes
+    # near another kart cost it the time it is faster (107 s behind mcts-lqng's 106.3 s on complex, 102.7 s
+    # alone); the line with one model of the kart for everyone closed up and hit the kart ahead (0.65 collisions
+    # at fault per race against fixed-lqng, session 12). With both: 20-0 against fixed-lqng on complex, no
+    # collision at fault, 14-6 against mcts-lqng (session 13, results/rl/session13)
+    racing_line_default: bool = parameter(True, RACING_LINE_DEFAULT_HELP)
     deviation_gain_s: float = parameter(DEVIATION_GAIN, DEVIATION_GAIN_HELP, unit="s", minimum=0.0, maximum=5.0)
+    pace_model: bool = parameter(True, PACE_MODEL_HELP)
+    own_pace: float = parameter(1.0, OWN_PACE_HELP, minimum=0.8, maximum=1.3)
     deterministic: bool = parameter(
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
@@ -136,6 +141,8 @@ def build_mcts_rl(params: MCTSRLParams) -> Controller:
         # the following shield keeps the distance to a kart ahead; the game's coarse speed bins behind it only
         # held mcts-rl 5-17 m back, too far to ever pass (session 12)
         planned_speeds_behind=not params.keep_distance,
+        pace_model=params.pace_model,
+        own_pace=params.own_pace,
     )
     return HierarchicalController(
         "mcts-rl",

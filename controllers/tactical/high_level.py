@@ -19,6 +19,7 @@ from controllers.base import RaceContext
 from controllers.plan import Plan, Waypoint
 from controllers.racing_line import RacingLine, optimise_racing_line
 from controllers.tactical.game import GameParams
+from controllers.tactical.pace import PaceMeter
 from controllers.tactical.planner import PlayerState, TacticalPlanner
 from sim_core.observation import KartView, Observation
 from sim_core.rules import lane_change_update
@@ -37,6 +38,11 @@ DEVIATION_GAIN_HELP = (
     "time the searched lanes must gain on the others over the racing line's to replace it, both played out the "
     "same deterministic way (ours, not the paper's: the search's principal line is too noisy to read as a forecast)"
 )
+PACE_MODEL_HELP = (
+    "the game times each kart by its pace measured in clean air this race (ours, not the paper's: one model of "
+    "the kart for everyone sees nothing to gain behind a slower kart)"
+)
+OWN_PACE_HELP = "the ego's pace (its section times over the racing line's) until it has been measured in clean air"
 MAX_SQUEEZE_LOOKAHEAD = (
     2.0  # [s] how far ahead a kart alongside is extrapolated sideways (:meth:`MCTSPlanner._no_squeeze`)
 )
@@ -75,6 +81,8 @@ class MCTSPlanner:
         lane_change_slack: int = 0,
         deviation_gain: float | None = DEVIATION_GAIN,
         planned_speeds_behind: bool = True,
+        pace_model: bool = False,
+        own_pace: float = 1.0,
     ) -> None:
         if lane_change_slack < 0:
             raise ValueError("lane_change_slack must be >= 0")
@@ -94,6 +102,11 @@ class MCTSPlanner:
         # of its own (LQNG); off, the line's speed profile binds everywhere and the tracker keeps its distance
         # (the RL trackers' following shield)
         self.planned_speeds_behind = planned_speeds_behind
+        # every kart's section times scaled by its pace measured in clean air (controllers.tactical.pace); the
+        # ego's is ``own_pace`` until it has one, another kart's the ego's until it has one
+        self.pace_model = pace_model
+        self.own_pace = own_pace
+        self._pace: PaceMeter | None = None
         self._planner: TacticalPlanner | None = None
         self._context: RaceContext | None = None
         self._line_lanes: tuple[int, ...] = ()
@@ -112,6 +125,7 @@ class MCTSPlanner:
         self._line = optimise_racing_line(context.track, context.kart)
         self._line_lanes = self._line.checkpoint_lanes
         self._committed = {}
+        self._pace = PaceMeter.of(context.track, self._line) if self.pace_model else None
         self._planner = TacticalPlanner(
             context.track,
             context.kart,
@@ -159,7 +173,15 @@ class MCTSPlanner:
             wear=kart.wear,
             lane_changes=count,
             modelled=kart.index != ego,
+            pace=self.pace_of(kart.index, ego),
         )
+
+    def pace_of(self, kart: int, ego: int) -> float:
+        """The pace the game gives ``kart`` (1 without the pace model): its measured one, else the ego's."""
+        if self._pace is None:
+            return 1.0
+        mine = self._pace.pace(ego, self.own_pace)
+        return mine if kart == ego else self._pace.pace(kart, mine)
 
     def _no_squeeze(self, plan: Plan, me: PlayerState, karts: tuple[KartView, ...]) -> Plan:
         """``plan`` with the ego's first waypoint after its next checkpoint kept in the ego's lane there when it
@@ -211,7 +233,9 @@ class MCTSPlanner:
     def plan(self, observation: Observation) -> Plan:
         """Search from every kart's predicted crossing of its next checkpoint (:meth:`present_state`); the ego
         does not steer into a kart alongside it (:meth:`_no_squeeze`)."""
-        assert self._planner is not None, "reset() first"
+        assert self._planner is not None and self._context is not None, "reset() first"
+        if self._pace is not None:
+            self._pace.observe(observation.karts, self._context.track)
         players = [
             self.present_state(k, observation.time, observation.ego)
             for k in observation.karts

@@ -39,6 +39,7 @@ class PlayerState:
     wear: float  # [-] tyre wear at that crossing
     lane_changes: int  # the referee's eq. (10) gen_lane_var counter
     modelled: bool = False  # the player follows the opponent model (the racing line's lanes) instead of searching
+    pace: float = 1.0  # [-] its section times over the game's model of the kart (controllers.tactical.pace)
 
 
 class TacticalPlanner:
@@ -118,6 +119,7 @@ class TacticalPlanner:
             state[row, rules.BIN] = self.speed_bin(p.speed)
             state[row, rules.WEAR] = round(min(max(p.wear, 0.0), 1.0) * WEAR_UNITS)
             state[row, rules.LANE_COUNT] = p.lane_changes
+            state[row, rules.PACE] = round(p.pace * rules.PACE_UNITS)
             times.append(p.time + self._advance(state[row], leader_cp, p.speed))
             self._slow_to_feasible(state[row])
         earliest = min(times)

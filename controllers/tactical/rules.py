@@ -30,7 +30,9 @@ LANE_COUNT = 5  # eq. (10) gen_lane_var: recent lane changes on this contiguous 
 PREV_LANE = 6  # 0-based lane at the previous checkpoint (to tell when two players' paths cross)
 PREV_TIME = 7  # [0.01 s] time state at the previous checkpoint (to check a collision along the section)
 MODELLED = 8  # 1: the player follows the opponent model (the racing line's lanes), 0: it plays freely
-N_FIELDS = 9
+PACE = 9  # [1e-3] the player's section times over the game's (its measured pace, controllers.tactical.pace); 0: 1
+N_FIELDS = 10
+PACE_UNITS = 1000
 
 COLLISION_SAMPLES = 5  # points along a section (both ends included) where two karts' positions are compared
 
@@ -223,7 +225,9 @@ def bin_arrival(
     t = segment_time(tb.distance[c, here, lane], v0, v1, tb.accel, tb.brake, v_max)
     if t < 0.0:
         return 0, 0
-    arrival = state[p, TIME] + int(t * 100.0 + tb.penalty[c, here, lane] + 0.5)
+    # a kart slower or faster than the game's model of the kart takes its sections that much longer or shorter
+    pace = 1.0 if state[p, PACE] == 0 else state[p, PACE] / PACE_UNITS
+    arrival = state[p, TIME] + int((t * 100.0 + tb.penalty[c, here, lane]) * pace + 0.5)
     # eq. (8) gen_coll_avoid as the paper discretises it: no arrival close in time in the same lane or across a path
     if tb.collision_window > 0:
         target = state[p, CHECKPOINT] + 1
