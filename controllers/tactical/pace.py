@@ -2,7 +2,7 @@
 
 The discrete game times every player by one model of the kart, calibrated to the racing line's speed profile
 (:mod:`controllers.tactical.calibration`). The karts on track are not that model: the LQNG tracker laps
-``complex`` about 6% over the line's predicted lap and the RL trackers 2-4%, so a kart behind a slower one
+``complex`` 5-10% over the line's predicted lap and the RL trackers 3-4%, so a kart behind a slower one
 sees no time to gain by going past it and follows it home (``mcts-rl`` 3.5 s a race faster alone than
 ``mcts-lqng``, 0.6 s behind it at the flag, session 12). A kart's pace is its observed time over the sections it
 crossed in clean air, over the line's predicted time for the same sections, forgetting old sections
