@@ -246,6 +246,15 @@ def train(
             help="probability a training race has no opponent racing (finished phantoms; ours, spec: 0)",
         ),
     ] = 0.0,
+    mcts_speed_sigma: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            max=5.0,
+            help="MCTS-RL's random training plans ask for 15 - |N(0, sigma)| m/s at each waypoint (spec: 1.5; "
+            "0: top speed everywhere, what mcts-rl's planner sends when no kart is ahead)",
+        ),
+    ] = 1.5,
     fine_tune_from: Annotated[
         Path | None,
         typer.Option(
@@ -279,7 +288,12 @@ def train(
         env = replace(env, weights=replace(env.weights, wall_hit=wall_hit_penalty))
     if near_wall_spawns is not None:
         env = replace(env, near_wall_probability=near_wall_spawns)
-    env = replace(env, near_wall_heading=math.radians(near_wall_heading_deg), solo_probability=solo_spawns)
+    env = replace(
+        env,
+        near_wall_heading=math.radians(near_wall_heading_deg),
+        solo_probability=solo_spawns,
+        mcts_speed_sigma=mcts_speed_sigma,
+    )
     result = run_training(env, ppo, folder, resume=resume, progress_bar=not as_json, fine_tune_from=fine_tune_from)
     if as_json:
         print_json(

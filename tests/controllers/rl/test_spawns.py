@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 
 from controllers.rl.envs import make_config
-from controllers.rl.spawns import spawn_race
+from controllers.rl.spawns import random_plan, spawn_race
 from sim_core import state as st
 from sim_core.geometry import wrap_angle
 from sim_core.params import SimParams
@@ -43,3 +43,18 @@ def test_near_wall_spawns_turn_toward_their_wall_up_to_the_limit() -> None:
         assert np.sign(relative) == np.sign(d) or relative == 0.0  # left wall: turned left (counter-clockwise)
         assert abs(relative) <= np.radians(60.0) + 1e-9
     assert max(abs(r) for _, r in spawns) > np.radians(40.0)  # the range is used, not a fixed angle
+
+
+def test_mcts_rl_training_plans_ask_for_the_spec_speeds_or_top_speed_everywhere() -> None:
+    """The spec's 15 - |N(0, 1.5)| m/s per waypoint by default; with ``mcts_speed_sigma`` 0 top speed at every
+    waypoint, the speed mcts-rl's planner sends at race time with no kart ahead (``karting train
+    --mcts-speed-sigma``). Fixed-RL's plans are at top speed either way."""
+    track = get_track("train-oval-small")
+    rng = np.random.default_rng(0)
+    config = make_config("mcts-rl")
+    _, speeds = random_plan(config, track, 15.0, rng)
+    assert np.all(speeds <= 15.0) and np.mean(speeds) < 14.5
+    _, flat = random_plan(replace(config, mcts_speed_sigma=0.0), track, 15.0, rng)
+    assert np.all(flat == 15.0)
+    _, fixed = random_plan(make_config("fixed-rl"), track, 15.0, rng)
+    assert np.all(fixed == 15.0)
