@@ -36,13 +36,18 @@ def section_times(xy: np.ndarray, speed: np.ndarray, sample_section: np.ndarray,
     return np.bincount(sample_section, weights=dt, minlength=n)
 
 
+def line_sample_sections(track: Track, line: RacingLine) -> np.ndarray:
+    """(M,) the section (checkpoint c to c + 1) each sample of ``line`` lies in."""
+    s_cp = np.asarray(track.checkpoint_s, dtype=float) % track.length
+    return (np.searchsorted(s_cp, line.s, side="right") - 1) % track.n_checkpoints
+
+
 def shifted_line_times(track: Track, line: RacingLine, kart: KartParams) -> tuple[np.ndarray, np.ndarray]:
     """(shifts, times): each section's time (len(shifts), N) on the line moved sideways by each shift [m]
     (:func:`~controllers.racing_line.shifted_lines`, at its reference tyre wear)."""
     paths = shifted_lines(track, line, kart)
     n = track.n_checkpoints
-    s_cp = np.asarray(track.checkpoint_s, dtype=float) % track.length
-    sample_section = (np.searchsorted(s_cp, line.s, side="right") - 1) % n
+    sample_section = line_sample_sections(track, line)
     times = np.array([section_times(xy, speed, sample_section, n) for xy, speed in zip(paths.xy, paths.speed)])
     return paths.shifts, times
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from controllers.racing_line import RacingLine
-from controllers.tactical.calibration import section_times
+from controllers.tactical.calibration import line_sample_sections, section_times
 from sim_core.observation import KartView
 from sim_core.track import Track
 
@@ -25,10 +25,8 @@ PACE_RANGE = (0.8, 1.3)  # a measured pace is clipped to this (a spin or a wall 
 
 def line_section_times(track: Track, line: RacingLine) -> np.ndarray:
     """(N,) time [s] the racing line's speed profile takes through each section (checkpoint c to c + 1)."""
-    n = track.n_checkpoints
-    s_cp = np.asarray(track.checkpoint_s, dtype=float) % track.length
-    sample_section = (np.searchsorted(s_cp, line.s, side="right") - 1) % n
-    return section_times(np.asarray(line.xy), np.asarray(line.speed), sample_section, n)
+    sections = line_sample_sections(track, line)
+    return section_times(np.asarray(line.xy), np.asarray(line.speed), sections, track.n_checkpoints)
 
 
 @dataclass
@@ -61,12 +59,6 @@ class PaceMeter:
         """A meter for ``track`` timed against ``line``."""
         return cls(line_section_times(track, line))
 
-    def reset(self) -> None:
-        """Forget every kart (a new race)."""
-        self._last.clear()
-        self._observed.clear()
-        self._modelled.clear()
-
     def observe(self, karts: tuple[KartView, ...], track: Track) -> None:
         """Count the sections each kart crossed since the previous observation."""
         n = len(self.section_time)
@@ -94,7 +86,6 @@ class PaceMeter:
 
     def pace(self, kart: int, fallback: float) -> float:
         """The kart's measured pace (observed over modelled time), or ``fallback`` before it has one."""
-        modelled = self._modelled.get(kart, 0.0)
-        if modelled <= 0.0 or modelled < self.min_seconds:
+        if kart not in self._modelled or self._modelled[kart] < self.min_seconds:
             return fallback
-        return float(np.clip(self._observed[kart] / modelled, *PACE_RANGE))
+        return float(np.clip(self._observed[kart] / self._modelled[kart], *PACE_RANGE))
