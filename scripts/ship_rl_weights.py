@@ -28,7 +28,10 @@ from controllers.rl.policy import export_policy, weights_folder
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("agent")
-    parser.add_argument("folder", type=Path, help="the karting train output folder")
+    parser.add_argument(
+        "folder", type=Path, help="the karting train output folder, or one of its checkpoints (with policy.npz)"
+    )
+    parser.add_argument("--log", type=Path, help="the training log (default FOLDER/training_log.csv)")
     parser.add_argument("--command", required=True)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--wall-s", type=float, required=True)
@@ -39,12 +42,21 @@ def main() -> None:
     args = parser.parse_args()
     out = weights_folder(args.agent)
     out.mkdir(parents=True, exist_ok=True)
-    export_policy(args.folder, out)
-    for name in ("vecnormalize.pkl", "training_log.csv"):
-        shutil.copy(args.folder / name, out / name)
-    plot_curves(out / "training_log.csv", out / "curves.png", title=f"{args.agent}: PPO self-play")
-    with (args.folder / "training_log.csv").open() as fh:
+    log = args.log or args.folder / "training_log.csv"
+    if (args.folder / "model.zip").exists():
+        export_policy(args.folder, out)
+    else:  # a checkpoint exported where it was trained (its model.zip left behind)
+        shutil.copy(args.folder / "policy.npz", out / "policy.npz")
+    shutil.copy(args.folder / "vecnormalize.pkl", out / "vecnormalize.pkl")
+    with log.open() as fh:
         rows = list(csv.DictReader(fh))
+    if args.folder.name.startswith("step_"):  # the log up to the checkpoint
+        rows = [r for r in rows if int(r["timesteps"]) <= int(args.folder.name.removeprefix("step_"))]
+    with (out / "training_log.csv").open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    plot_curves(out / "training_log.csv", out / "curves.png", title=f"{args.agent}: PPO self-play")
     rewards = [(int(r["timesteps"]), float(r["ep_rew_mean"])) for r in rows if r["ep_rew_mean"]]
     manifest = {
         "agent": args.agent,
