@@ -46,6 +46,7 @@ SPEED_CEILING_HELP = (
     "0 m/s: exactly the profile (ours, not the paper's: controllers.rl.shield)"
 )
 SHIELD_HELP = "never faster than the racing line's speed profile plus the margin (ours, not the paper's)"
+KEEP_SIDE_HELP = "never steer toward a kart alongside faster than the lateral room to it allows (ours, not the paper's)"
 LOOKAHEAD_HELP = "how far ahead the karts' sideways motion is extrapolated to tell whether a kart is in the path"
 KEEP_DISTANCE_HELP = (
     "brake rather than close on a kart ahead in the path faster than it could stop short of the rules' buffer "
@@ -91,6 +92,7 @@ class MCTSRLParams:
     # shield keeps the distance), it meets that kart's sideways moves as fixed-rl does (0.75 collisions at fault
     # per race against mcts-lqng on complex looking 0 s ahead, 0.40 looking 0.8 s ahead; session 12)
     keep_distance_lookahead_s: float = parameter(0.8, LOOKAHEAD_HELP, unit="s", minimum=0.0, maximum=2.0)
+    keep_side: bool = parameter(False, KEEP_SIDE_HELP)
 
 
 @dataclass(frozen=True)
@@ -108,6 +110,7 @@ class FixedRLParams:
     speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
     keep_distance: bool = parameter(True, KEEP_DISTANCE_HELP)
     keep_distance_lookahead_s: float = parameter(0.8, LOOKAHEAD_HELP, unit="s", minimum=0.0, maximum=2.0)
+    keep_side: bool = parameter(False, KEEP_SIDE_HELP)
 
 
 @dataclass(frozen=True)
@@ -154,6 +157,7 @@ def build_mcts_rl(params: MCTSRLParams) -> Controller:
             speed_ceiling_margin=_ceiling_margin(params),
             keep_distance=params.keep_distance,
             keep_distance_lookahead=params.keep_distance_lookahead_s,
+            keep_side=params.keep_side,
         ),
         rate_hz=RL_RATE_HZ,
     )
@@ -173,6 +177,7 @@ def build_fixed_rl(params: FixedRLParams) -> Controller:
             line_margin=params.line_margin_m,
             keep_distance=params.keep_distance,
             keep_distance_lookahead=params.keep_distance_lookahead_s,
+            keep_side=params.keep_side,
         ),
         rate_hz=RL_RATE_HZ,
     )

@@ -33,7 +33,7 @@ from controllers.rl.config import DECISION_STEPS, EPISODE_STEPS, STACK, AgentKin
 from controllers.rl.observations import TrackTables, build_frame, frame_size, place_phantoms
 from controllers.rl.policy import Policy, load_policy, weights_folder
 from controllers.rl.recovery import StallRecovery
-from controllers.rl.shield import FollowingShield, LineSpeedShield
+from controllers.rl.shield import FollowingShield, LineSpeedShield, SideShield
 from controllers.rl.spawns import racing_lane_at_checkpoints
 from sim_core import state as st
 from sim_core.observation import Observation
@@ -71,6 +71,7 @@ class RLTracker:
     inside the walls, as the planner's). With ``keep_distance``, a :class:`~controllers.rl.shield.FollowingShield`
     brakes whenever the kart closes on a kart ahead in its path too fast to stop short of the rules' buffer
     (``keep_distance_lookahead``: how far ahead [s] the karts' sideways motion is extrapolated to judge the path).
+    With ``keep_side``, a :class:`~controllers.rl.shield.SideShield` bounds the steer toward a kart alongside.
 
     By default (``deterministic``) it decides by the policy's Gaussian: the mean steer and the pedal branch the
     Gaussian most likely picks (:meth:`controllers.rl.policy.Policy.act`). Otherwise it samples the Gaussian, as
@@ -88,8 +89,11 @@ class RLTracker:
         line_margin: float = 1.0,
         keep_distance: bool = False,
         keep_distance_lookahead: float = 0.0,
+        keep_side: bool = False,
     ) -> None:
         self.agent = agent
+        self.keep_side = keep_side
+        self.side: SideShield | None = None
         self.keep_distance = keep_distance
         self.keep_distance_lookahead = keep_distance_lookahead
         self.following: FollowingShield | None = None
@@ -119,6 +123,7 @@ class RLTracker:
         self.following = (
             FollowingShield.of(context.kart, lookahead=self.keep_distance_lookahead) if self.keep_distance else None
         )
+        self.side = SideShield.of(context.kart) if self.keep_side else None
         sizes = {STACK * frame_size(m): m for m in range(1, 9)}
         if self.policy.obs_size not in sizes:
             raise ValueError(f"{self.agent} weights take {self.policy.obs_size} floats: no race size gives that")
@@ -172,6 +177,8 @@ class RLTracker:
             self.action = self.shield.limit(self.action, me.speed, me.progress)
         if self.following is not None:
             self.action = self.following.limit(self.action, me, observation.karts, self._ctx.track)
+        if self.side is not None:
+            self.action = self.side.limit(self.action, me, observation.karts, self._ctx.track)
         if self.recovery is not None:
             _, tangent = self._ctx.track.point_at(me.progress)
             error = math.remainder(math.atan2(tangent[1], tangent[0]) - me.heading, math.tau)

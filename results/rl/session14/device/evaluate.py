@@ -1,42 +1,61 @@
-"""Device: race candidate RL weights (CAND folders) on a track; one JSON line per race."""
-import json, os, sys
+"""Race candidate RL weights on a track, one JSON line per race (run by ``run.sh`` on the lent machine).
+
+    PYTHONPATH=$PWD python results/rl/session14/device/evaluate.py TASKS.jsonl WORKERS
+
+Each line of TASKS is ``[label, agent, folder, opponent, track, seed]``: ``agent`` (a registered RL agent) drives
+with the ``policy.npz`` in ``folder`` (the shipped weights when empty) against the registered ``opponent``; the
+race is ``scripts/head_to_head.py``'s race number ``seed`` (kart 0 in lane 2 on even seeds).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+import controllers.rl.policy as policy_module
+import controllers.rl.tracker as tracker_module
+
 sys.path.insert(0, "scripts")
-import controllers.rl.policy as po
-import controllers.rl.tracker as tr
-
-ORIG = po.weights_folder
+SHIPPED = policy_module.weights_folder
 
 
-def one(task):
+def race(task: tuple[str, str, str, str, str, int]) -> str:
+    """One race of ``task`` as a JSON line (an ``error`` key instead of ``karts`` if it failed)."""
     label, agent, folder, opponent, track, seed = task
-    def wf(name):
-        return Path(folder) if (name == agent and folder) else ORIG(name)
-    tr.weights_folder = wf
-    po.weights_folder = wf
+
+    def weights(name: str) -> Path:
+        return Path(folder) if (name == agent and folder) else SHIPPED(name)
+
+    tracker_module.weights_folder = weights  # type: ignore[assignment]
     import head_to_head
-    names = (agent, opponent) if opponent != "solo" else (agent,)
+
+    line: dict[str, object] = {"label": label, "opponent": opponent, "track": track, "seed": seed}
     try:
-        if opponent == "solo":
-            from controllers.race import RaceSpec, run_race
-            out = run_race(RaceSpec(track=track, controllers=names, seed=seed, start_lanes=(2,)))
-            r = out.result
-        else:
-            r = head_to_head.race_once(track, names, seed, seed).result
-        karts = [dict(finished=k.finished, time=None if k.finish_time is None else round(k.finish_time, 2),
-                      faults=k.collisions_at_fault, illegal=k.illegal_lane_changes_per_step)
-                 for k in r.karts]
-        return json.dumps(dict(label=label, opponent=opponent, track=track, seed=seed, winner=r.winner, karts=karts))
-    except Exception as exc:  # noqa: BLE001
-        return json.dumps(dict(label=label, opponent=opponent, track=track, seed=seed, error=repr(exc)))
+        result = head_to_head.race_once(track, (agent, opponent), seed, seed).result
+    except Exception as exc:  # a failed candidate is a result, not a crash of the batch
+        line["error"] = repr(exc)
+        return json.dumps(line)
+    line["winner"] = result.winner
+    line["karts"] = [
+        {
+            "finished": k.finished,
+            "time": None if k.finish_time is None else round(k.finish_time, 2),
+            "faults": k.collisions_at_fault,
+            "illegal": k.illegal_lane_changes_per_step,
+        }
+        for k in result.karts
+    ]
+    return json.dumps(line)
 
 
-def main():
-    tasks = [json.loads(line) for line in open(sys.argv[1])]
+def main() -> None:
+    """Race every task of the file in ``argv[1]`` with ``argv[2]`` processes, printing lines in task order."""
+    with open(sys.argv[1]) as fh:
+        tasks = [tuple(json.loads(line)) for line in fh if line.strip()]
     with ProcessPoolExecutor(int(sys.argv[2])) as pool:
-        for line in pool.map(one, [tuple(t) for t in tasks]):
+        for line in pool.map(race, tasks):  # type: ignore[arg-type]
             print(line, flush=True)
 
 

@@ -1,5 +1,11 @@
 #!/bin/bash
-# Device job: parallel RL fine-tunes, then validation races of each candidate. Usage: bash .dev/run.sh STEPS TRAIN_TIMEOUT
+# The lent 16-core machine's job (session 14): one `karting train` fine-tune per line of JOBS side by side, then the
+# validation races of each candidate (its final model and its checkpoint at or under 2M steps) against fixed-lqng
+# and (mcts-rl) fixed-rl, seeds 0 and 1. From the repo root, with the RL packages installed (the machine's Python
+# 3.12 plus stable-baselines3, gymnasium, pettingzoo and osqp carried as wheels):
+#   JOBS=results/rl/session14/device/round1_jobs.txt bash results/rl/session14/device/run.sh 3000000 390 500000
+#   JOBS=results/rl/session14/device/round2_jobs.txt bash results/rl/session14/device/run.sh 1400000 200 500000
+# (round 2 fine-tunes round 1's folders in /tmp/work, on the same machine). Usage: run.sh STEPS TRAIN_TIMEOUT CKPT
 STEPS=${1:-3000000}; TT=${2:-400}; CK=${3:-500000}
 OUT=${OUT:-/tmp/out}; mkdir -p $OUT
 export PYTHONPATH=/tmp/site:$PWD PYTHONUNBUFFERED=1 NUMBA_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
@@ -13,7 +19,7 @@ while read -r name agent src seed extra; do
   ( timeout $TT $PY -m karting train $agent --out $W/$name --fine-tune-from $src --steps $STEPS --normalise-reward \
      --wall-hit-penalty 5 --near-wall-spawns 0.3 --near-wall-heading-deg 60 --log-std-init -1 --solo-spawns 0.3 \
      --checkpoint-steps $CK --seed $seed --json $extra > $W/$name.log 2>&1; echo "$name rc=$? t=$(( $(date +%s) - T0 ))" >> $OUT/train_status.txt ) &
-done < ${JOBS:-.dev/jobs.txt}
+done < ${JOBS:?}
 wait
 echo "training done after $(( $(date +%s) - T0 )) s"; cat $OUT/train_status.txt
 # export policies of the final model and each checkpoint
@@ -23,7 +29,7 @@ from pathlib import Path
 from controllers.rl.policy import export_policy
 W = Path("/tmp/work")
 tasks = []
-for line in open(__import__("os").environ.get("JOBS", ".dev/jobs.txt")):
+for line in open(__import__("os").environ["JOBS"]):
     if not line.strip():
         continue
     name, agent = line.split()[:2]
@@ -54,7 +60,8 @@ with open("/tmp/tasks.jsonl", "w") as fh:
         fh.write(json.dumps(t) + "\n")
 print(len(tasks), "tasks")
 PY
-$PY .dev/evaluate.py /tmp/tasks.jsonl ${EVAL_WORKERS:-16} > $OUT/eval.jsonl 2> $OUT/eval.err
+$PY results/rl/session14/device/evaluate.py /tmp/tasks.jsonl ${EVAL_WORKERS:-16} > $OUT/eval.jsonl 2> $OUT/eval.err
 echo "eval done after $(( $(date +%s) - T0 )) s"; wc -l $OUT/eval.jsonl
-cd $W && tar czf $OUT/cand_m1.tgz --exclude='checkpoints/*/model.zip' g40 g41 g42 g43 g44 g45 c46 *.log 2>/dev/null; tar czf $OUT/cand_m2.tgz --exclude='checkpoints/*/model.zip' c47 c48 c49 c50 c51 2>/dev/null; tar czf $OUT/cand_e.tgz --exclude='checkpoints/*/model.zip' e52 e53 2>/dev/null
+# the candidates back in three parts (the device tool returns files of at most 16 MiB); checkpoints without model.zip
+cut -d' ' -f1 $JOBS | split -l 6 - /tmp/part_; (cd $W && for p in /tmp/part_*; do tar czf $OUT/candidates_${p##*_}.tgz --exclude='checkpoints/*/model.zip' $(cat $p) $(sed 's/$/.log/' $p); done)
 ls -la $OUT
