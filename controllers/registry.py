@@ -51,7 +51,6 @@ from controllers.lane_follower import LaneFollowerController, LaneFollowerParams
 from controllers.lq.tracker import FIXED_LINE_TRACKING, MCTS_TRACKING, LQNGTracker
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
 from controllers.rl.agents import E2EParams, FixedRLParams, MCTSRLParams, build_e2e, build_fixed_rl, build_mcts_rl
-from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import (
     DEVIATION_GAIN,
     DEVIATION_GAIN_HELP,
@@ -131,15 +130,7 @@ class FixedLQNGParams:
 
 
 def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
-    game = GameParams(horizon=params.horizon)
-    planner = MCTSPlanner(
-        iterations=params.iterations,
-        rate_hz=params.planner_rate_hz,
-        params=game,
-        deviation_gain=params.deviation_gain_s if params.racing_line_default else None,
-        pace_model=params.pace_model,
-        own_pace=params.own_pace,
-    )
+    planner = MCTSPlanner.from_settings(params)
     tracker = LQNGTracker(replace(MCTS_TRACKING, horizon=params.lqng_horizon_steps))
     return HierarchicalController("mcts-lqng", planner, tracker)
 

@@ -27,7 +27,6 @@ from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.parameters import parameter
 from controllers.rl.tracker import RLTracker
-from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import (
     DEVIATION_GAIN,
     DEVIATION_GAIN_HELP,
@@ -135,17 +134,12 @@ def _ceiling_margin(params: MCTSRLParams | FixedRLParams | E2EParams) -> float |
 
 def build_mcts_rl(params: MCTSRLParams) -> Controller:
     """MCTS planner + RL tracker."""
-    planner = MCTSPlanner(
-        iterations=params.iterations,
-        rate_hz=params.planner_rate_hz,
-        params=GameParams(horizon=params.horizon),
+    planner = MCTSPlanner.from_settings(
+        params,
         lane_change_slack=params.lane_change_slack,
-        deviation_gain=params.deviation_gain_s if params.racing_line_default else None,
         # the following shield keeps the distance to a kart ahead; the game's coarse speed bins behind it only
         # held mcts-rl 5-17 m back, too far to ever pass (session 12)
         planned_speeds_behind=not params.keep_distance,
-        pace_model=params.pace_model,
-        own_pace=params.own_pace,
     )
     return HierarchicalController(
         "mcts-rl",

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from typing import Protocol
 
 from controllers.base import RaceContext
 from controllers.plan import Plan, Waypoint
@@ -46,6 +47,26 @@ OWN_PACE_HELP = "the ego's pace (its section times over the racing line's) until
 MAX_SQUEEZE_LOOKAHEAD = (
     2.0  # [s] how far ahead a kart alongside is extrapolated sideways (:meth:`MCTSPlanner._no_squeeze`)
 )
+
+
+class TacticalSettings(Protocol):
+    """The public settings an MCTS-planned controller shares (its registry parameters): search budget and rate,
+    the game's horizon, the racing line as the default plan, and the pace model."""
+
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def horizon(self) -> int: ...
+    @property
+    def planner_rate_hz(self) -> float: ...
+    @property
+    def racing_line_default(self) -> bool: ...
+    @property
+    def deviation_gain_s(self) -> float: ...
+    @property
+    def pace_model(self) -> bool: ...
+    @property
+    def own_pace(self) -> float: ...
 
 
 def _lanes_legal(track: Track, lane: int, count: int, waypoints: list[Waypoint], limit: int) -> bool:
@@ -112,6 +133,23 @@ class MCTSPlanner:
         self._line_lanes: tuple[int, ...] = ()
         self._line: RacingLine | None = None
         self._committed: dict[int, int] = {}
+
+    @classmethod
+    def from_settings(
+        cls, settings: TacticalSettings, *, lane_change_slack: int = 0, planned_speeds_behind: bool = True
+    ) -> MCTSPlanner:
+        """The planner of a registered controller's ``settings`` (with the racing-line default off, the
+        search's lanes always: ``deviation_gain`` None)."""
+        return cls(
+            iterations=settings.iterations,
+            rate_hz=settings.planner_rate_hz,
+            params=GameParams(horizon=settings.horizon),
+            lane_change_slack=lane_change_slack,
+            deviation_gain=settings.deviation_gain_s if settings.racing_line_default else None,
+            planned_speeds_behind=planned_speeds_behind,
+            pace_model=settings.pace_model,
+            own_pace=settings.own_pace,
+        )
 
     @property
     def lane_limit(self) -> int:

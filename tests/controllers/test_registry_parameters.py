@@ -25,6 +25,7 @@ from controllers.registry import (
     make_controller,
     validate_parameters,
 )
+from controllers.rl.tracker import RLTracker
 from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import MCTSPlanner
 from sim_core.observation import Observation
@@ -85,6 +86,13 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
     unshielded = make_controller("mcts-rl", keep_distance=False)
     assert isinstance(unshielded, HierarchicalController) and isinstance(unshielded.planner, MCTSPlanner)
     assert unshielded.planner.planned_speeds_behind
+    for name in ("mcts-rl", "fixed-rl"):
+        sided = make_controller(name, keep_side=True)
+        assert isinstance(sided, HierarchicalController) and isinstance(sided.tracker, RLTracker)
+        assert sided.tracker.keep_side and not make_controller(name).tracker.keep_side  # type: ignore[attr-defined]
+    slack = make_controller("mcts-rl", lane_change_slack=1, horizon=6)
+    assert isinstance(slack, HierarchicalController) and isinstance(slack.planner, MCTSPlanner)
+    assert slack.planner.lane_change_slack == 1 and slack.planner.params.horizon == 6
     fixed = make_controller("fixed-lqng", line_margin_m=1.5)
     assert isinstance(fixed, HierarchicalController) and isinstance(fixed.planner, FixedLinePlanner)
     assert fixed.planner.margin == 1.5
