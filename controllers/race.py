@@ -14,6 +14,7 @@ from controllers.replay import Replay, ReplayRecorder, apply_plan_targets
 from sim_core.laps import LapTimer
 from sim_core.observation import observe
 from sim_core.params import DT, SimParams, kart_preset
+from sim_core.track import Track
 from sim_core.track_io import get_track, load_track
 from sim_core.world import RaceResult, World
 
@@ -43,7 +44,7 @@ class RaceOutcome:
     lap_times: tuple[tuple[float, ...], ...] = ()  # [s] each kart's completed laps, by kart index
 
 
-def load_any_track(name: str):  # type: ignore[no-untyped-def]
+def load_any_track(name: str) -> Track:
     """A built-in track by name, or a track JSON by path."""
     if name.endswith(".json") or "/" in name:
         return load_track(name)

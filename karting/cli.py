@@ -261,12 +261,18 @@ def train(
             help="start from this trained folder, or a shipped agent's (its actor, fresh critic); fresh step count"
         ),
     ] = None,
+    reward_weight: Annotated[
+        list[str] | None,
+        typer.Option(
+            help="override one reward weight, NAME=VALUE (a RewardWeights field, e.g. target_lane=0); repeatable"
+        ),
+    ] = None,
     as_json: JsonOption = False,
 ) -> None:
     """Train an RL agent by PPO self-play on the training ovals (progress bar, checkpoints, log and curves)."""
     from dataclasses import replace
 
-    from controllers.rl.config import PPOConfig, agent_kind
+    from controllers.rl.config import PPOConfig, agent_kind, override_weights
     from controllers.rl.envs import make_config
     from controllers.rl.train import train as run_training
 
@@ -286,6 +292,11 @@ def train(
     env = make_config(kind)
     if wall_hit_penalty is not None:
         env = replace(env, weights=replace(env.weights, wall_hit=wall_hit_penalty))
+    if reward_weight:
+        try:
+            env = replace(env, weights=override_weights(env.weights, reward_weight))
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--reward-weight") from exc
     if near_wall_spawns is not None:
         env = replace(env, near_wall_probability=near_wall_spawns)
     env = replace(

@@ -16,11 +16,11 @@ import numpy as np
 import typer
 
 from controllers.base import RaceContext
+from controllers.race import load_any_track
 from controllers.registry import make_controller
 from sim_core import state as st
 from sim_core.observation import observe
 from sim_core.params import DT, GRAVITY, SimParams, kart_preset
-from sim_core.track_io import get_track
 from sim_core.world import World
 
 app = typer.Typer(add_completion=False)
@@ -43,7 +43,7 @@ def path_lateral_acceleration(xy: np.ndarray, dt: float, window: int = AVERAGE_S
 
 def solo_race(track_name: str, controller: str, seed: int, kart: str) -> dict[str, object]:
     """One kart alone on ``track_name``; figures from its poses."""
-    track = get_track(track_name)
+    track = load_any_track(track_name)
     params = SimParams(kart=kart_preset(kart))
     world = World(track, 1, 1, params)
     world.reset(start_lanes=(2,))

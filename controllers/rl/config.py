@@ -8,7 +8,8 @@ every 2 physics steps (25 Hz), observations stacked over 4 decisions, a horizon 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+import math
+from dataclasses import dataclass, field, fields, replace
 from typing import Literal
 
 AgentKind = Literal["mcts-rl", "fixed-rl", "e2e"]
@@ -76,6 +77,26 @@ def reward_weights(kind: AgentKind) -> RewardWeights:
     checkpoint centre, so the lane term rewards passing near the centre line (the original's D_lane on the
     centre box)."""
     return RewardWeights()
+
+
+def override_weights(weights: RewardWeights, assignments: list[str] | tuple[str, ...]) -> RewardWeights:
+    """``weights`` with each ``NAME=VALUE`` of ``assignments`` applied (the training command's
+    ``--reward-weight``); a ValueError names an unknown field or a value that is not a non-negative number."""
+    known = [f.name for f in fields(RewardWeights)]
+    changes: dict[str, float] = {}
+    for item in assignments:
+        name, sep, text = item.partition("=")
+        name = name.strip().replace("-", "_")
+        if not sep or name not in known:
+            raise ValueError(f"expected NAME=VALUE with NAME one of {known}, got {item!r}")
+        try:
+            value = float(text)
+        except ValueError:
+            raise ValueError(f"{name}: {text!r} is not a number") from None
+        if not math.isfinite(value) or value < 0:
+            raise ValueError(f"{name}: weights are non-negative numbers (the terms apply the sign), got {text!r}")
+        changes[name] = value
+    return replace(weights, **changes)
 
 
 @dataclass(frozen=True)

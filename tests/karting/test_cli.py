@@ -131,3 +131,22 @@ def test_python_dash_m_karting_is_the_same_command_line() -> None:
     assert done.returncode == 0, done.stderr
     for command in ("tracks", "import-track", "race", "serve"):
         assert command in done.stdout
+
+
+def test_train_reward_weight_reaches_the_training_environment(monkeypatch, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    import controllers.rl.train as training
+
+    seen = {}
+
+    def fake_training(env, ppo, folder, **_):  # type: ignore[no-untyped-def]
+        seen["weights"] = env.weights
+        return training.TrainResult(timesteps=0, wall_s=1.0, env_steps_per_s=0.0, out=folder)
+
+    monkeypatch.setattr(training, "train", fake_training)
+    args = ["train", "e2e", "--out", str(tmp_path), "--steps", "1", "--json"]
+    done = runner.invoke(app, [*args, "--reward-weight", "target_lane=0", "--reward-weight", "player_hit=9"])
+    assert done.exit_code == 0, done.output
+    assert seen["weights"].target_lane == 0.0 and seen["weights"].player_hit == 9.0
+    assert seen["weights"].speed == 1.0  # the rest as the spec
+    bad = runner.invoke(app, [*args, "--reward-weight", "targetlane=0"], env=NARROW)
+    assert bad.exit_code == 2 and "--reward-weight" in bad.output and "target_lane" in bad.output

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from controllers.rl import rewards as rw
-from controllers.rl.config import WALL_THRESHOLDS, RewardWeights
+from controllers.rl.config import WALL_THRESHOLDS, RewardWeights, override_weights
 from sim_core.state import HIT_KART, HIT_NONE, HIT_WALL
 
 W = RewardWeights()
@@ -77,3 +79,24 @@ def test_reverse() -> None:
     assert rw.reverse_penalty(10.0, np.array(0)) == -10.0
     assert rw.reverse_penalty(10.0, np.array(2)) == -30.0
     assert rw.reverse_penalty(10.0, np.array(-1)) == 0.0
+
+
+def test_override_weights_sets_the_named_terms_and_keeps_the_rest() -> None:
+    changed = override_weights(W, ["target_lane=0", "checkpoint-time=40.5"])
+    assert changed.target_lane == 0.0 and changed.checkpoint_time == 40.5
+    assert replace(changed, target_lane=W.target_lane, checkpoint_time=W.checkpoint_time) == W
+
+
+@pytest.mark.parametrize(
+    ("assignment", "message"),
+    [
+        ("bogus=1", "NAME one of"),
+        ("target_lane", "NAME=VALUE"),
+        ("speed=fast", "not a number"),
+        ("swerve=-1", "non-negative"),
+        ("swerve=nan", "non-negative"),
+    ],
+)
+def test_override_weights_rejects_what_is_not_a_weight(assignment: str, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        override_weights(W, [assignment])
