@@ -9,6 +9,7 @@ decision costs a few microseconds of matrix products. Torch is imported by :func
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -63,14 +64,40 @@ class Policy:
         return np.array([np.clip(mean[0], -1.0, 1.0), most_probable_pedal(mean[1], std[1])])
 
     def mean(self, obs: np.ndarray) -> np.ndarray:
-        """(2,) the action distribution's mean (unclipped)."""
+        """(2,) the action distribution's mean (unclipped); (n, 2) for a batch (n, D) of observations."""
         h = self.normalise(np.asarray(obs, dtype=np.float64))
         last = len(self.weights) - 1
+        batched = h.ndim > 1
         for i, (w, b) in enumerate(zip(self.weights, self.biases)):
-            h = w @ h + b
+            h = (h @ w.T if batched else w @ h) + b
             if i < last:
                 h = np.tanh(h)
         return h
+
+    def sample(self, obs: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """(n, 2) actions in [-1, 1] for a batch (n, D) of raw observations: samples of the Gaussian, as PPO's
+        rollouts act (the self-play opponents drive this way)."""
+        mean = self.mean(obs)
+        return np.clip(mean + np.exp(self.log_std) * rng.standard_normal(mean.shape), -1.0, 1.0)
+
+
+def policy_from_state(
+    state: Mapping[str, np.ndarray], obs_mean: np.ndarray, obs_var: np.ndarray, clip_obs: float
+) -> Policy:
+    """The actor of a Stable-Baselines3 ``ActorCriticPolicy`` from its state dict (as numpy arrays) and the
+    observation statistics it was trained under."""
+    layers = sorted(
+        {int(k.split(".")[2]) for k in state if k.startswith("mlp_extractor.policy_net.") and k.endswith("weight")}
+    )
+    names = [f"mlp_extractor.policy_net.{i}" for i in layers] + ["action_net"]
+    return Policy(
+        tuple(np.asarray(state[f"{name}.weight"]) for name in names),
+        tuple(np.asarray(state[f"{name}.bias"]) for name in names),
+        np.asarray(obs_mean, dtype=np.float64),
+        np.asarray(obs_var, dtype=np.float64),
+        float(clip_obs),
+        np.asarray(state["log_std"]),
+    )
 
 
 def load_policy(folder: Path | str) -> Policy:
@@ -114,22 +141,19 @@ def export_policy(folder: Path | str, out: Path | str | None = None) -> Path:
     # the schedules are not needed for inference; skipping them also loads models saved by another Python
     model = PPO.load(folder / "model.zip", device="cpu", custom_objects=INFERENCE_ONLY)
     state = {k: v.detach().cpu().numpy().astype(np.float32) for k, v in model.policy.state_dict().items()}
-    layers = sorted(
-        {int(k.split(".")[2]) for k in state if k.startswith("mlp_extractor.policy_net.") and k.endswith("weight")}
-    )
-    names = [f"mlp_extractor.policy_net.{i}" for i in layers] + ["action_net"]
     with (folder / "vecnormalize.pkl").open("rb") as fh:
         norm = pickle.load(fh)  # the trainer's own file (trusted); SB3 saves VecNormalize by pickle
+    policy = policy_from_state(state, norm.obs_rms.mean, norm.obs_rms.var, norm.clip_obs)
     arrays: dict[str, np.ndarray] = {
-        "n_layers": np.array(len(names)),
-        "obs_mean": np.asarray(norm.obs_rms.mean, dtype=np.float64),
-        "obs_var": np.asarray(norm.obs_rms.var, dtype=np.float64),
-        "clip_obs": np.array(float(norm.clip_obs)),
-        "log_std": state["log_std"],
+        "n_layers": np.array(len(policy.weights)),
+        "obs_mean": policy.obs_mean,
+        "obs_var": policy.obs_var,
+        "clip_obs": np.array(policy.clip_obs),
+        "log_std": policy.log_std,
     }
-    for i, name in enumerate(names):
-        arrays[f"w{i}"] = state[f"{name}.weight"]
-        arrays[f"b{i}"] = state[f"{name}.bias"]
+    for i, (w, b) in enumerate(zip(policy.weights, policy.biases)):
+        arrays[f"w{i}"] = w
+        arrays[f"b{i}"] = b
     path = target / POLICY_FILE
     np.savez_compressed(path, **arrays)  # type: ignore[arg-type]
     return path

@@ -69,3 +69,36 @@ def test_a_shipped_agent_fine_tunes_from_its_inference_files(tmp_path: Path) -> 
     assert obs.shape[0] == 32 and np.allclose(mean, expected, atol=1e-3), (mean, expected)
     tuned = train(env, ppo, tmp_path / "tuned", fine_tune_from=shipped)
     assert tuned.timesteps >= 4096 and (tmp_path / "tuned" / MODEL).exists()
+
+
+def test_the_pool_drives_opponents_by_a_numpy_copy_of_the_actor_frozen_when_added() -> None:
+    """A snapshot's mean action equals the torch actor's at the time it was added, row by row and batched, and
+    later training of the live policy does not move it; its samples are seeded by the pool."""
+    import torch
+
+    from controllers.rl.train import make_model
+
+    env = make_config("mcts-rl", tracks=("train-oval-small",))
+    ppo = PPOConfig(total_steps=2048, n_races=8, buffer_size=1024, batch_size=256)
+    venv = VecNormalize(SelfPlayVecEnv(RaceBatch(env, 8), OpponentPool(1, 1.0, 0)), norm_obs=True, clip_obs=10.0)
+    model = make_model(venv, ppo)
+    raw = np.random.default_rng(1).normal(size=(5, venv.observation_space.shape[0])) * 3.0
+    mean, var = raw.mean(axis=0), raw.var(axis=0) + 0.5
+    pool = OpponentPool(2, 1.0, seed=7)
+    pool.add(model.policy, mean, var, 0)
+    with torch.no_grad():
+        x = torch.as_tensor(np.clip((raw - mean) / np.sqrt(var + 1e-8), -10, 10), dtype=torch.float32)
+        expected = model.policy.get_distribution(x).distribution.mean.numpy()
+    frozen = pool.snapshots[0].policy
+    assert np.allclose(frozen.mean(raw), expected, atol=1e-4)
+    assert np.allclose(np.stack([frozen.mean(r) for r in raw]), frozen.mean(raw), atol=1e-12)
+    with torch.no_grad():
+        for p in model.policy.parameters():
+            p.add_(1.0)
+    assert np.allclose(frozen.mean(raw), expected, atol=1e-4)
+    again = OpponentPool(2, 1.0, seed=7)
+    again.add(model.policy, mean, var, 0)
+    again.snapshots[0] = pool.snapshots[0]
+    again.current = again.snapshots[0]
+    first, second = pool(raw), again(raw)
+    assert first.shape == (5, 2) and np.all(np.abs(first) <= 1.0) and np.array_equal(first, second)
