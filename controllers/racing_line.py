@@ -76,7 +76,12 @@ def _centre_samples(track: Track, spacing: float) -> tuple[np.ndarray, np.ndarra
     return s, np.stack([x, y], axis=1), np.stack([nx / norm, ny / norm], axis=1), wl, wr
 
 
-def _line_qp(track: Track, margin: float, spacing: float):  # type: ignore[no-untyped-def]
+LineTerms = list[tuple[sp.csc_matrix, np.ndarray]]
+
+
+def _line_qp(
+    track: Track, margin: float, spacing: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, LineTerms, np.ndarray, np.ndarray]:
     """The pieces of the line QPs: samples, curvature and length Hessians and linear terms, and bounds."""
     s, xy, normal, wl, wr = _centre_samples(track, spacing)
     m = len(s)
