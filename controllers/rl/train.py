@@ -11,9 +11,11 @@ model (``model.zip``), the normalisation statistics (``vecnormalize.pkl``), peri
 from __future__ import annotations
 
 import csv
+import json
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +34,7 @@ from controllers.rl.policy import POLICY_FILE
 from controllers.rl.selfplay import OpponentPool, SelfPlayVecEnv
 
 MODEL, NORMALISER, LOG, CURVES = "model.zip", "vecnormalize.pkl", "training_log.csv", "curves.png"
+SETTINGS = "training_settings.json"  # one entry per run into the folder: every setting it trained with
 # observations behind a shipped agent's statistics: weight enough that fine-tuning moves them slowly (its count
 # is not shipped)
 SHIPPED_STATISTICS_COUNT = 1e6
@@ -213,6 +216,7 @@ def train(
         (out / LOG).unlink(missing_ok=True)
         venv = VecNormalize(raw, norm_obs=True, norm_reward=ppo.normalise_reward, clip_obs=10.0, gamma=ppo.gamma)
         model = make_model(venv, ppo)
+    record_settings(out, env, ppo, resumed=resuming, fine_tune_from=fine_tune_from, start_steps=model.num_timesteps)
     callback = SelfPlayCallback(pool, venv, ppo, out)
     remaining = max(ppo.total_steps - model.num_timesteps, 0)
     start_steps, start = model.num_timesteps, time.perf_counter()
@@ -224,6 +228,26 @@ def train(
         plot_curves(out / LOG, out / CURVES, title=f"{env.agent}: PPO self-play")
     done = model.num_timesteps - start_steps
     return TrainResult(out, model.num_timesteps, wall, done / wall if wall > 0 else 0.0)
+
+
+def record_settings(
+    out: Path, env: EnvConfig, ppo: PPOConfig, *, resumed: bool, fine_tune_from: Path | None, start_steps: int
+) -> None:
+    """Add this run's settings (environment, reward weights, PPO) to ``out``'s :data:`SETTINGS` file: a fresh
+    list unless the run resumes the model there, so a trained folder says what it was trained with."""
+    path = out / SETTINGS
+    runs = json.loads(path.read_text()) if resumed and path.exists() else []
+    runs.append(
+        {
+            "started": datetime.now(UTC).isoformat(timespec="seconds"),
+            "start_steps": int(start_steps),
+            "resumed": resumed,
+            "fine_tune_from": None if fine_tune_from is None or resumed else str(fine_tune_from),
+            "env": asdict(env),
+            "ppo": asdict(ppo),
+        }
+    )
+    path.write_text(json.dumps(runs, indent=2) + "\n")
 
 
 def policy_actions(model: PPO, norm: VecNormalize, deterministic: bool = True) -> Callable[[np.ndarray], np.ndarray]:

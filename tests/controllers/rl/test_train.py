@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -12,15 +13,18 @@ from controllers.rl.batch import RaceBatch
 from controllers.rl.config import PPOConfig
 from controllers.rl.envs import make_config
 from controllers.rl.selfplay import OpponentPool, SelfPlayVecEnv
-from controllers.rl.train import CURVES, LOG, MODEL, NORMALISER, mean_decision_reward, policy_actions, train
+from controllers.rl.train import CURVES, LOG, MODEL, NORMALISER, SETTINGS, mean_decision_reward, policy_actions, train
 
 
 def test_smoke_training_beats_a_random_policy(tmp_path: Path) -> None:
     env = make_config("mcts-rl", tracks=("train-oval-small",))
     ppo = PPOConfig(total_steps=8192, n_races=32, buffer_size=2048, batch_size=256, save_steps=2048, swap_steps=1024)
     result = train(env, ppo, tmp_path)
-    for name in (MODEL, NORMALISER, LOG, CURVES):
+    for name in (MODEL, NORMALISER, LOG, CURVES, SETTINGS):
         assert (tmp_path / name).exists(), name
+    (run,) = json.loads((tmp_path / SETTINGS).read_text())
+    assert run["env"]["weights"]["target_lane"] == env.weights.target_lane and run["ppo"]["total_steps"] == 8192
+    assert run["env"]["tracks"] == ["train-oval-small"] and not run["resumed"] and run["fine_tune_from"] is None
     pool = OpponentPool(1, 1.0, 0)
     norm = VecNormalize.load(str(tmp_path / NORMALISER), SelfPlayVecEnv(RaceBatch(env, 32), pool))
     norm.training = False
@@ -32,10 +36,14 @@ def test_smoke_training_beats_a_random_policy(tmp_path: Path) -> None:
     # resuming continues the step count
     more = train(env, PPOConfig(**{**ppo.__dict__, "total_steps": 10240}), tmp_path, resume=True)
     assert more.timesteps >= 10240 > result.timesteps - 1
+    runs = json.loads((tmp_path / SETTINGS).read_text())
+    assert [r["resumed"] for r in runs] == [False, True] and runs[1]["start_steps"] == result.timesteps
     # fine-tuning starts from those weights and statistics with a fresh step count, into another folder
     # (two rollouts: the linear schedule reaches 0 at the end, so a one-rollout run would update at rate 0)
     tuned = train(env, PPOConfig(**{**ppo.__dict__, "total_steps": 4096}), tmp_path / "tuned", fine_tune_from=tmp_path)
     assert 4096 <= tuned.timesteps < 6144
+    (tuned_run,) = json.loads((tmp_path / "tuned" / SETTINGS).read_text())
+    assert tuned_run["fine_tune_from"] == str(tmp_path) and tuned_run["start_steps"] == 0
     start = PPO.load(tmp_path / MODEL, device="cpu").policy.state_dict()
     after = PPO.load(tmp_path / "tuned" / MODEL, device="cpu").policy.state_dict()
     assert any(not np.allclose(start[k].numpy(), after[k].numpy()) for k in start)
