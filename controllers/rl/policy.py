@@ -57,10 +57,10 @@ class Policy:
         """(2,) ``[steer, pedal]`` in [-1, 1] for one raw observation (D,): a sample from the Gaussian with
         ``rng`` (as PPO's training rollouts act), else its mean steer with the pedal branch the Gaussian most
         likely picks (:func:`controllers.rl.actions.most_probable_pedal`)."""
+        if rng is not None:
+            return self.sample(obs, rng)
         mean = self.mean(obs)
         std = np.exp(self.log_std)
-        if rng is not None:
-            return np.clip(mean + std * rng.standard_normal(mean.shape), -1.0, 1.0)
         return np.array([np.clip(mean[0], -1.0, 1.0), most_probable_pedal(mean[1], std[1])])
 
     def mean(self, obs: np.ndarray) -> np.ndarray:
@@ -75,8 +75,8 @@ class Policy:
         return h
 
     def sample(self, obs: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """(n, 2) actions in [-1, 1] for a batch (n, D) of raw observations: samples of the Gaussian, as PPO's
-        rollouts act (the self-play opponents drive this way)."""
+        """Actions in [-1, 1], (2,) for one raw observation (D,) or (n, 2) for a batch (n, D): samples of the
+        Gaussian, as PPO's rollouts act (the self-play opponents drive this way)."""
         mean = self.mean(obs)
         return np.clip(mean + np.exp(self.log_std) * rng.standard_normal(mean.shape), -1.0, 1.0)
 

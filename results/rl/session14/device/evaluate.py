@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -50,12 +51,13 @@ def race(task: tuple[str, str, str, str, str, int]) -> str:
     return json.dumps(line)
 
 
-def main() -> None:
-    """Race every task of the file in ``argv[1]`` with ``argv[2]`` processes, printing lines in task order."""
+def main(run_task: Callable[[tuple[str, str, str, str, str, int]], str] = race) -> None:
+    """Run ``run_task`` on every task of the file in ``argv[1]`` with ``argv[2]`` processes, printing lines in
+    task order."""
     with open(sys.argv[1]) as fh:
         tasks = [tuple(json.loads(line)) for line in fh if line.strip()]
     with ProcessPoolExecutor(int(sys.argv[2])) as pool:
-        for line in pool.map(race, tasks):  # type: ignore[arg-type]
+        for line in pool.map(run_task, tasks):  # type: ignore[arg-type]
             print(line, flush=True)
 
 

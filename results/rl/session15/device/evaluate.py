@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 import sys
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -44,14 +43,5 @@ def race(task: Task) -> str:
     return json.dumps(line)
 
 
-def main() -> None:
-    """Race every task of the file in ``argv[1]`` with ``argv[2]`` processes, printing lines in task order."""
-    with open(sys.argv[1]) as fh:
-        tasks = [tuple(json.loads(line)) for line in fh if line.strip()]
-    with ProcessPoolExecutor(int(sys.argv[2])) as pool:
-        for line in pool.map(race, tasks):  # type: ignore[arg-type]
-            print(line, flush=True)
-
-
 if __name__ == "__main__":
-    main()
+    session14.main(race)
