@@ -285,13 +285,9 @@ class MCTSPlanner:
         if self.racing_line:
             plan = self._prefer_racing_line(plan, me.lane, me.lane_changes, self._clear_behind(observation))
         plan = self._no_squeeze(plan, me, observation.karts)
-        # the root's own crossing (the lane the kart is committed to at its next checkpoint) leads the plan. Its
-        # speed is the predicted crossing speed only where planned speeds bind: without them it is a target like
-        # the rest, and the RL tracker read the kart's own (lower) speed there as "do not accelerate" (mcts-rl
-        # 1.3 s a race slower on complex, session 16)
+        # the root's own crossing (the lane the kart is committed to at its next checkpoint) leads the plan
         point = self._context.track.lane_point(me.checkpoint, me.lane) if self._context else (0.0, 0.0)
-        speed = me.speed if self.planned_speeds_behind else self._context.kart.top_speed
-        first = Waypoint(me.checkpoint, me.lane, (float(point[0]), float(point[1])), speed, 0.0)
+        first = Waypoint(me.checkpoint, me.lane, (float(point[0]), float(point[1])), me.speed, 0.0)
         plan = replace(plan, waypoints={**plan.waypoints, plan.ego: (first, *plan.ego_waypoints)})
         self._committed = {w.checkpoint: w.lane for w in plan.ego_waypoints}
         return plan

@@ -257,21 +257,3 @@ def test_without_planned_speeds_behind_every_waypoint_takes_the_lines_speed_prof
     out = free._prefer_racing_line(plan, me.lane, me.lane_changes)
     assert all(w.speed == PAPER_KART.top_speed for w in out.ego_waypoints)
     assert [w.lane for w in out.ego_waypoints] == [w.lane for w in kept.ego_waypoints]
-
-
-def test_the_roots_own_waypoint_follows_the_same_speed_rule() -> None:
-    """The plan's first waypoint is the ego's committed crossing of its next checkpoint. With planned speeds it
-    keeps the predicted crossing speed; without them it is top speed like the rest: the RL tracker read the kart's
-    own speed there (10 m/s here, mid-corner) as a target and did not accelerate (mcts-rl 1.3 s a race slower on
-    complex, session 16)."""
-    s = float(TRACK.checkpoint_s[5]) + 4.0
-    me = _view_at(TRACK, 0, s, 2, 10.0, 5)
-    other = _view_at(TRACK, 1, s + 6.0, 3, 10.0, 5)
-    observation = Observation(10.0, 0, (me, other), np.zeros(9), np.zeros(9, dtype=np.int64))
-    free = MCTSPlanner(iterations=50, planned_speeds_behind=False)
-    free.reset(RaceContext(TRACK, PAPER_KART, 0, 2, TRACK.lane_change_limit, 0))
-    plan = free.plan(observation)
-    assert plan.ego_waypoints[0].checkpoint == 6
-    assert all(w.speed == PAPER_KART.top_speed for w in plan.ego_waypoints)
-    kept = PLANNER.plan(observation).ego_waypoints[0]
-    assert kept.checkpoint == 6 and kept.speed < PAPER_KART.top_speed
