@@ -115,7 +115,7 @@ class MCTSLQNGParams:
     racing_line_default: bool = parameter(True, RACING_LINE_DEFAULT_HELP)
     deviation_gain_s: float = parameter(DEVIATION_GAIN, DEVIATION_GAIN_HELP, unit="s", minimum=0.0, maximum=5.0)
 
-    pace_model: bool = parameter(False, PACE_MODEL_HELP)
+    pace_model: bool = parameter(True, PACE_MODEL_HELP)
     own_pace: float = parameter(1.0, OWN_PACE_HELP, minimum=0.8, maximum=1.3)
 
 
@@ -127,6 +127,12 @@ class FixedLQNGParams:
         1.0, "how far the planner's racing line keeps inside the walls", unit="m", minimum=0.5, maximum=3.0
     )
     lqng_horizon_steps: int = parameter(4, "steps of 0.02 s the LQ game looks ahead", minimum=1, maximum=25)
+    speed_scale: float = parameter(
+        1.0,
+        "fraction of its speed targets it drives at (under 1: a slower, handicapped kart)",
+        minimum=0.5,
+        maximum=1.0,
+    )
 
 
 def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
@@ -137,7 +143,9 @@ def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
 
 def _fixed_lqng(params: FixedLQNGParams) -> Controller:
     planner = FixedLinePlanner(margin=params.line_margin_m)
-    tracker = LQNGTracker(replace(FIXED_LINE_TRACKING, horizon=params.lqng_horizon_steps))
+    tracker = LQNGTracker(
+        replace(FIXED_LINE_TRACKING, horizon=params.lqng_horizon_steps, speed_scale=params.speed_scale)
+    )
     return HierarchicalController("fixed-lqng", planner, tracker)
 
 

@@ -1,13 +1,15 @@
 """The tactical planner in traffic (issue 11): the collision window along a section, the line-following
-opponent model, line-calibrated segment times, and no plan collapse in a 4-kart race."""
+opponent model, line-calibrated segment times, no plan collapse in a 4-kart race, and a pass of a slower kart."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from controllers.race import RaceSpec, run_race
 from controllers.race_metrics import RaceMetrics
 from controllers.racing_line import optimise_racing_line
+from controllers.registry import make_controller
 from controllers.tactical import rules
 from controllers.tactical.calibration import calibrate_tables
 from controllers.tactical.game import GameParams, build_tables
@@ -89,3 +91,18 @@ def test_four_kart_race_plans_never_collapse() -> None:
     horizon = GameParams().horizon
     assert set(metrics.shortest_plan) == {0, 2}
     assert min(metrics.shortest_plan.values()) >= horizon, metrics.shortest_plan
+
+
+@pytest.mark.parametrize("speed_scale", [0.85, 0.9])
+def test_a_faster_tactical_kart_passes_a_slower_one_by_the_rules(speed_scale: float) -> None:
+    """Started on the outside of complex's first corner, mcts-lqng comes out of it behind a line follower that
+    drives at 85-90% of its speed targets; it must get past it and win, with no collision at fault and no
+    illegal lane change. (Until session 17 it followed such a kart home, 0.46 s behind after 3 laps.)"""
+    spec = RaceSpec(track="complex", controllers=("mcts-lqng", "fixed-lqng"), laps=2, seed=0, start_lanes=(2, 3))
+    drivers = [make_controller("mcts-lqng"), make_controller("fixed-lqng", speed_scale=speed_scale)]
+    tactical, slow = run_race(spec, drivers=drivers).result.karts
+    assert tactical.finished and slow.finished
+    assert tactical.passes >= 1
+    assert tactical.finish_time is not None and slow.finish_time is not None
+    assert tactical.finish_time < slow.finish_time
+    assert tactical.collisions_at_fault == 0 and tactical.illegal_lane_changes == 0

@@ -1,5 +1,6 @@
 """The LQNG tracker's steering rate limit: in a real duel the tactical driver's steer input never changes
-faster than its preset's rate, while the same duel without the limit does (so the limit is what holds it)."""
+faster than its preset's rate, while the same duel without the limit does (so the limit is what holds it);
+and its speed scale, a handicapped kart's top speed."""
 
 from __future__ import annotations
 
@@ -13,8 +14,9 @@ from controllers.lq.tracker import MCTS_TRACKING, LQNGTracker
 from controllers.plan import Plan
 from controllers.race import RaceSpec, run_race
 from controllers.registry import make_controller
-from sim_core.observation import Observation
-from sim_core.params import DT
+from sim_core.observation import Observation, observe
+from sim_core.params import DT, PAPER_KART
+from sim_core.world import World
 
 
 class RecordingTracker:
@@ -53,3 +55,20 @@ def test_the_tactical_tracker_rate_limits_its_steering_in_traffic() -> None:
     assert limited.max() <= MCTS_TRACKING.steer_rate + 1e-9
     unlimited = _steer_rates(0.0)
     assert unlimited.max() > MCTS_TRACKING.steer_rate
+
+
+def _top_speed(speed_scale: float) -> float:
+    """The highest speed [m/s] fixed-lqng reaches in a lap of the oval alone at ``speed_scale``."""
+    fastest = [0.0]
+
+    def record(world: World, drivers: object, step: int) -> None:
+        fastest[0] = max(fastest[0], observe(world, 0)[0].me.speed)
+
+    spec = RaceSpec(track="oval", controllers=("fixed-lqng",), laps=1, seed=0)
+    run_race(spec, on_step=record, drivers=[make_controller("fixed-lqng", speed_scale=speed_scale)])
+    return fastest[0]
+
+
+def test_a_handicapped_kart_keeps_to_its_speed_scale() -> None:
+    assert _top_speed(1.0) > 0.97 * PAPER_KART.top_speed
+    assert _top_speed(0.8) <= 0.8 * PAPER_KART.top_speed + 0.1

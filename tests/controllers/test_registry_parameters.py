@@ -56,10 +56,14 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
         "lqng_horizon_steps": "4",
         "racing_line_default": "True",
         "deviation_gain_s": "0.1",
-        "pace_model": "False",
+        "pace_model": "True",
         "own_pace": "1.0",
     }
-    assert dict(REGISTRY["fixed-lqng"].parameters) == {"line_margin_m": "1.0", "lqng_horizon_steps": "4"}
+    assert dict(REGISTRY["fixed-lqng"].parameters) == {
+        "line_margin_m": "1.0",
+        "lqng_horizon_steps": "4",
+        "speed_scale": "1.0",
+    }
 
 
 def test_overrides_reach_the_parts_that_use_them() -> None:
@@ -80,9 +84,15 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
     assert rl.planner.deviation_gain == 0.1  # the racing line unless the search gains, as mcts-lqng's
     assert rl.planner.pace_model and rl.planner.own_pace == 1.0  # every kart at its measured pace
     assert not rl.planner.planned_speeds_behind  # its following shield keeps the distance
-    paced = make_controller("mcts-lqng", pace_model=True, own_pace=1.05)
+    paced = make_controller("mcts-lqng", own_pace=1.05)
     assert isinstance(paced, HierarchicalController) and isinstance(paced.planner, MCTSPlanner)
-    assert paced.planner.pace_model and paced.planner.own_pace == 1.05
+    assert paced.planner.pace_model and paced.planner.own_pace == 1.05  # measured paces by default
+    unpaced = make_controller("mcts-lqng", pace_model=False)
+    assert isinstance(unpaced, HierarchicalController) and isinstance(unpaced.planner, MCTSPlanner)
+    assert not unpaced.planner.pace_model
+    slowed = make_controller("fixed-lqng", speed_scale=0.9)
+    assert isinstance(slowed, HierarchicalController) and isinstance(slowed.tracker, LQNGTracker)
+    assert slowed.tracker.params.speed_scale == 0.9 and make_controller("fixed-lqng").tracker.params.speed_scale == 1.0  # type: ignore[attr-defined]
     unshielded = make_controller("mcts-rl", keep_distance=False)
     assert isinstance(unshielded, HierarchicalController) and isinstance(unshielded.planner, MCTSPlanner)
     assert unshielded.planner.planned_speeds_behind
