@@ -96,7 +96,7 @@ def test_four_kart_race_plans_never_collapse() -> None:
 @pytest.mark.parametrize("speed_scale", [0.85, 0.9])
 def test_a_faster_tactical_kart_passes_a_slower_one_by_the_rules(speed_scale: float) -> None:
     """Started on the outside of complex's first corner, mcts-lqng comes out of it behind a line follower that
-    drives at 85-90% of its speed targets; it must get past it and win, with no collision at fault and no
+    drives at 85% or 90% of its speed targets; it must get past it and win, with no collision at fault and no
     illegal lane change. (Until session 17 it followed such a kart home, 0.46 s behind after 3 laps.)"""
     spec = RaceSpec(track="complex", controllers=("mcts-lqng", "fixed-lqng"), laps=2, seed=0, start_lanes=(2, 3))
     drivers = [make_controller("mcts-lqng"), make_controller("fixed-lqng", speed_scale=speed_scale)]

@@ -82,6 +82,8 @@ class LQNGParams:
     follow_distance: float = 3.0  # [m] centre to centre (a kart length and a margin)
     follow_time: float = 0.25  # [s]
     follow_band: float = 1.6  # [m]
+    # [m] also keep station behind a kart this close sideways to the lateral offset the kart steers for; 0: off
+    follow_path_band: float = 0.0
     follow_brake_gain: float = 3.0  # [1/s] deceleration per m/s above the station-keeping speed
     # [m] a kart less than this ahead is alongside, not ahead (the referee's alongside rule): lane discipline,
     # not braking, keeps the two apart
@@ -96,15 +98,18 @@ class LQNGParams:
 # racing line's speed profile binds. Steering at most 5/s (lock to lock in 0.4 s) only clips the rare jumps of
 # the solved input (up to 50/s where a new plan or a kart entering the game moves the aim point); the races it
 # was sampled on had the same winners within 0.03 s (results/issue11/session9/README.md). Station keeping 0.15 s
-# (not 0.25 s) behind: 0.25 s held it too far back for the game to plan a pass of a kart 15% slower (it followed
-# it home); at 0.15 s it passes one 9% slower, and every race against an equal kart ends as before
-# (results/issue11/session17/README.md)
+# (not 0.25 s) behind a kart whose centre is within 1.0 m (not 1.6 m) of its own sideways, or within 1.6 m of
+# where it steers: the old spacing held it so far back, and so long after it had started to pull out, that it
+# followed a kart 15% slower home on complex; now it passes one 8% slower, and every race against an equal kart
+# ends as before (results/issue11/session17/README.md)
 MCTS_TRACKING = LQNGParams(
     speed_margin=3.0,
     traffic_lane_tolerance=1.25,
     alongside_distance=4.0,
     follow_gain=1.0,
     follow_time=0.15,
+    follow_band=1.0,
+    follow_path_band=1.2,
     steer_rate=5.0,
 )
 # ``fixed-lqng``: the original's heading weight and avoidance scale with the fixed line (1.9, 0.45), a stronger
@@ -147,8 +152,9 @@ class LQNGTracker:
 
     def _aim(
         self, track: Track, kart: KartView, first: Waypoint, second: Waypoint, tolerance: float
-    ) -> tuple[float, float]:
-        """Pure-pursuit aim point on the path blending the kart's lateral offset into the waypoints' lanes."""
+    ) -> tuple[float, float, float]:
+        """Pure-pursuit aim point (x, y) on the path blending the kart's lateral offset into the waypoints' lanes,
+        and its lateral offset from the centre line [m]."""
         p = self.params
         lookahead = max(p.min_lookahead, abs(kart.speed) * p.lookahead_time)
         n = track.n_checkpoints
@@ -170,10 +176,12 @@ class LQNGTracker:
             correction = c1 + (c2 - c1) * min((lookahead - s1) / max(s2 - s1, 1e-6), 1.0)
         d = float(line.offset_at(aim_s)) + correction
         point, tangent = track.point_at(aim_s)
-        return float(point[0] - tangent[1] * d), float(point[1] + tangent[0] * d)
+        return float(point[0] - tangent[1] * d), float(point[1] + tangent[0] * d), d
 
-    def _station_limit(self, kart: KartView, others: list[KartView]) -> float:
-        """Highest speed [m/s] that keeps station behind the nearest kart ahead in ``kart``'s path (inf: none).
+    def _station_limit(self, kart: KartView, others: list[KartView], aim_offset: float) -> float:
+        """Highest speed [m/s] that keeps station behind the nearest kart ahead in ``kart``'s path (inf: none):
+        within ``follow_band`` of it sideways, or within ``follow_path_band`` of ``aim_offset``, the lateral offset
+        it steers for (a kart pulling out to pass leaves the other behind it; one cutting in behind does not).
 
         Ahead and aside are measured in the kart's own heading frame (in a hairpin the centre line's progress
         says little about the distance between two karts)."""
@@ -184,7 +192,8 @@ class LQNGTracker:
             dx, dy = other.x - kart.x, other.y - kart.y
             ahead = dx * cos_h + dy * sin_h
             aside = -dx * sin_h + dy * cos_h
-            if ahead <= p.follow_min_ahead or abs(aside) >= p.follow_band:
+            in_path = abs(aside) < p.follow_band or abs(other.lateral - aim_offset) < p.follow_path_band
+            if ahead <= p.follow_min_ahead or not in_path:
                 continue
             gap = ahead - (p.follow_distance + p.follow_time * kart.speed)
             limit = min(limit, max(other.speed + p.follow_gain * gap, 0.0))
@@ -218,15 +227,17 @@ class LQNGTracker:
         A, B = linearised_dynamics(players, DT)
         x0 = np.zeros(STATE_SIZE * len(players))
         targets = []
-        station = self._station_limit(me, others) if self.params.follow_gain > 0.0 else math.inf
+        station = math.inf
         for i, k in enumerate(players):
             # positions relative to the ego kart keep the numbers small
             x0[STATE_SIZE * i : STATE_SIZE * i + 3] = (k.x - me.x, k.y - me.y, k.speed)
             first, second = self._upcoming(track, k, plan, k.index)
-            ax, ay = self._aim(track, k, first, second, tolerance)
+            ax, ay, aim_offset = self._aim(track, k, first, second, tolerance)
             heading_error = math.remainder(math.atan2(ay - k.y, ax - k.x) - k.heading, 2.0 * math.pi)
             speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
             if i == 0:
+                if self.params.follow_gain > 0.0:
+                    station = self._station_limit(me, others, aim_offset)
                 speed = min(speed * self.params.speed_scale, station)
             targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))
         Q, q = self._costs(players, targets, plan)

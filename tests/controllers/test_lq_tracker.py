@@ -1,9 +1,10 @@
 """The LQNG tracker's steering rate limit: in a real duel the tactical driver's steer input never changes
-faster than its preset's rate, while the same duel without the limit does (so the limit is what holds it);
-and its speed scale, a handicapped kart's top speed."""
+faster than its preset's rate, while the same duel without the limit does (so the limit is what holds it); its
+speed scale, a handicapped kart's top speed; and whom it keeps station behind."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -14,7 +15,7 @@ from controllers.lq.tracker import MCTS_TRACKING, LQNGTracker
 from controllers.plan import Plan
 from controllers.race import RaceSpec, run_race
 from controllers.registry import make_controller
-from sim_core.observation import Observation, observe
+from sim_core.observation import KartView, Observation, observe
 from sim_core.params import DT, PAPER_KART
 from sim_core.world import World
 
@@ -72,3 +73,26 @@ def _top_speed(speed_scale: float) -> float:
 def test_a_handicapped_kart_keeps_to_its_speed_scale() -> None:
     assert _top_speed(1.0) > 0.97 * PAPER_KART.top_speed
     assert _top_speed(0.8) <= 0.8 * PAPER_KART.top_speed + 0.1
+
+
+def _kart(index: int, x: float, y: float, speed: float) -> KartView:
+    """A kart on a straight along +x (lateral offset = y)."""
+    return KartView(index, x, y, 0.0, speed, x, y, 0.25, 1, 2, 0, 0.0, speed, 0.25, False)
+
+
+def test_station_keeping_holds_behind_a_kart_in_its_path_and_not_beside_it() -> None:
+    """mcts-lqng's tracker keeps station (0.15 s + 3 m) behind a slower kart within 1.0 m of it sideways, or within
+    1.2 m of where it steers; pulling out to pass, 1.3 m aside and steering 2.5 m away, it is free to go by."""
+    tracker = LQNGTracker(MCTS_TRACKING)
+    me = _kart(0, 0.0, 0.0, 15.0)
+    gap = MCTS_TRACKING.follow_distance + MCTS_TRACKING.follow_time * me.speed
+    slower = 13.0
+    straight_ahead = _kart(1, gap, 0.5, slower)
+    assert tracker._station_limit(me, [straight_ahead], aim_offset=2.5) == slower
+    beside_the_path = _kart(1, gap, 1.3, slower)
+    assert tracker._station_limit(me, [beside_the_path], aim_offset=-1.2) == math.inf  # pulling out the other way
+    assert tracker._station_limit(me, [beside_the_path], aim_offset=1.0) == slower  # cutting in behind it
+    closer = _kart(1, gap - 1.0, 0.5, slower)
+    assert tracker._station_limit(me, [closer], aim_offset=0.0) == slower - MCTS_TRACKING.follow_gain * 1.0
+    alongside = _kart(1, MCTS_TRACKING.follow_min_ahead, 0.2, slower)
+    assert tracker._station_limit(me, [alongside], aim_offset=0.0) == math.inf  # the alongside rule, not braking

@@ -1,7 +1,7 @@
 """How much slower a kart must be before mcts-lqng gets past it: mcts-lqng against fixed-lqng handicapped to a
 fraction of its speed targets (``speed_scale``), start lanes alternating (mcts-lqng in lane 2 on even races,
 where it comes out of the first corner behind), with the shipped settings and with session 16's (no pace model,
-station keeping 0.25 s behind).
+station keeping 0.25 s behind a kart within 1.6 m sideways).
 
 Run from the repo root (prints one line per race, then a JSON summary per setting and scale)::
 
@@ -31,7 +31,9 @@ def tactical(setting: str) -> Controller:
         return make_controller("mcts-lqng")
     driver = make_controller("mcts-lqng", pace_model=False)
     assert isinstance(driver, HierarchicalController) and isinstance(driver.tracker, LQNGTracker)
-    driver.tracker = LQNGTracker(replace(driver.tracker.params, follow_time=0.25))
+    driver.tracker = LQNGTracker(
+        replace(driver.tracker.params, follow_time=0.25, follow_band=1.6, follow_path_band=0.0)
+    )
     return driver
 
 
