@@ -98,10 +98,10 @@ class LQNGParams:
 # racing line's speed profile binds. Steering at most 5/s (lock to lock in 0.4 s) only clips the rare jumps of
 # the solved input (up to 50/s where a new plan or a kart entering the game moves the aim point); the races it
 # was sampled on had the same winners within 0.03 s (results/issue11/session9/README.md). Station keeping 0.15 s
-# (not 0.25 s) behind a kart whose centre is within 1.0 m (not 1.6 m) of its own sideways, or within 1.6 m of
+# (not 0.25 s) behind a kart whose centre is within 1.0 m (not 1.6 m) of its own sideways, or within 1.2 m of
 # where it steers: the old spacing held it so far back, and so long after it had started to pull out, that it
-# followed a kart 15% slower home on complex; now it passes one 8% slower, and every race against an equal kart
-# ends as before (results/issue11/session17/README.md)
+# followed a kart 15% slower home on complex; now it passes one 10% slower (8% slower in half the starts), and
+# every race against an equal kart ends as before (results/issue11/session17/README.md)
 MCTS_TRACKING = LQNGParams(
     speed_margin=3.0,
     traffic_lane_tolerance=1.25,
