@@ -54,6 +54,8 @@ from controllers.rl.agents import E2EParams, FixedRLParams, MCTSRLParams, build_
 from controllers.tactical.high_level import (
     DEVIATION_GAIN,
     DEVIATION_GAIN_HELP,
+    HOLD_GAIN,
+    HOLD_GAIN_HELP,
     OWN_PACE_HELP,
     PACE_MODEL_HELP,
     RACING_LINE_DEFAULT_HELP,
@@ -114,6 +116,7 @@ class MCTSLQNGParams:
     lqng_horizon_steps: int = parameter(4, "steps of 0.02 s the LQ game looks ahead", minimum=1, maximum=25)
     racing_line_default: bool = parameter(True, RACING_LINE_DEFAULT_HELP)
     deviation_gain_s: float = parameter(DEVIATION_GAIN, DEVIATION_GAIN_HELP, unit="s", minimum=0.0, maximum=5.0)
+    hold_gain_s: float = parameter(HOLD_GAIN, HOLD_GAIN_HELP, unit="s", minimum=0.0, maximum=5.0)
 
     pace_model: bool = parameter(True, PACE_MODEL_HELP)
     own_pace: float = parameter(1.0, OWN_PACE_HELP, minimum=0.8, maximum=1.3)
@@ -136,7 +139,7 @@ class FixedLQNGParams:
 
 
 def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
-    planner = MCTSPlanner.from_settings(params)
+    planner = MCTSPlanner.from_settings(params, hold_gain=params.hold_gain_s)
     tracker = LQNGTracker(replace(MCTS_TRACKING, horizon=params.lqng_horizon_steps))
     return HierarchicalController("mcts-lqng", planner, tracker)
 

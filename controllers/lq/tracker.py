@@ -73,6 +73,11 @@ class LQNGParams:
     # [m] with another kart closer than this along the track (alongside), planned lanes are driven exactly
     # (tolerance 0) whatever ``traffic_lane_tolerance`` says: two karts blending onto one line would touch
     alongside_distance: float = 0.0
+    # [m] on a straight, with a kart ahead closer than this along the track and the next waypoint's lane at least
+    # ``pass_clearance`` sideways from it, planned lanes are driven exactly too: the plan is a pass, and blending
+    # toward the line would leave the kart in the other's wake, held back by station keeping; 0: off
+    pass_distance: float = 0.0
+    pass_clearance: float = 1.5  # [m]
     # [1/s] the steering input changes at most this fast (lock to lock in 2/rate s); 0: unlimited. A full-lock
     # zig-zag between planned lanes is what traction control turns into braking
     steer_rate: float = 0.0
@@ -101,11 +106,14 @@ class LQNGParams:
 # (not 0.25 s) behind a kart whose centre is within 1.0 m (not 1.6 m) of its own sideways, or within 1.2 m of
 # where it steers: the old spacing held it so far back, and so long after it had started to pull out, that it
 # followed a kart 15% slower home on complex; now it passes one 10% slower (8% slower in half the starts), and
-# every race against an equal kart ends as before (results/issue11/session17/README.md)
+# every race against an equal kart ends as before (results/issue11/session17/README.md). A pass planned on a straight
+# (the next lane clear of the kart ahead by 1.5 m, within 10 m of it) is driven exactly: blended toward the line it
+# stayed in the other's wake, held back by station keeping (results/issue11/session18/README.md)
 MCTS_TRACKING = LQNGParams(
     speed_margin=3.0,
     traffic_lane_tolerance=1.25,
     alongside_distance=4.0,
+    pass_distance=10.0,
     follow_gain=1.0,
     follow_time=0.15,
     follow_band=1.0,
@@ -178,6 +186,19 @@ class LQNGTracker:
         point, tangent = track.point_at(aim_s)
         return float(point[0] - tangent[1] * d), float(point[1] + tangent[0] * d), d
 
+    def _passing(self, track: Track, me: KartView, others: list[KartView], plan: Plan | None) -> bool:
+        """Whether ``me`` is on a straight with a kart ahead within ``pass_distance`` that its next planned lane
+        clears sideways by ``pass_clearance``: a planned pass."""
+        p = self.params
+        if not track.section_is_straight(me.checkpoints_passed):
+            return False
+        first, _ = self._upcoming(track, me, plan, me.index)
+        target = float(track.lane_offsets(first.checkpoint)[first.lane - 1])
+        return any(
+            0.0 < track.gap(me.progress, k.progress) < p.pass_distance and abs(target - k.lateral) >= p.pass_clearance
+            for k in others
+        )
+
     def _station_limit(self, kart: KartView, others: list[KartView], aim_offset: float) -> float:
         """Highest speed [m/s] that keeps station behind the nearest kart ahead in ``kart``'s path (inf: none):
         within ``follow_band`` of it sideways, or within ``follow_path_band`` of ``aim_offset``, the lateral offset
@@ -222,7 +243,8 @@ class LQNGTracker:
         others = [k for k in observation.others() if math.hypot(k.x - me.x, k.y - me.y) < w.avoid_radius]
         players = [me, *others]
         tolerance = self.params.traffic_lane_tolerance if others else self.params.lane_tolerance
-        if any(abs(track.gap(me.progress, k.progress)) < self.params.alongside_distance for k in others):
+        alongside = any(abs(track.gap(me.progress, k.progress)) < self.params.alongside_distance for k in others)
+        if alongside or (self.params.pass_distance > 0.0 and self._passing(track, me, others, plan)):
             tolerance = 0.0
         A, B = linearised_dynamics(players, DT)
         x0 = np.zeros(STATE_SIZE * len(players))

@@ -31,6 +31,7 @@ INTERACTION_WINDOW = 1.0  # [s] another kart predicted at a checkpoint this much
 # time (it must keep its distance, the follower's duty), so a leader defends by driving the racing line
 BEHIND_WINDOW = 0.15
 DEVIATION_GAIN = 0.1  # [s] default of MCTSPlanner.deviation_gain
+HOLD_GAIN = 0.05  # [s] mcts-lqng's default of MCTSPlanner.hold_gain
 RACING_LINE_DEFAULT_HELP = (
     "the racing line is the plan unless the searched lanes gain deviation_gain_s on it; off: the search's lanes "
     "(ours, not the paper's)"
@@ -42,6 +43,11 @@ DEVIATION_GAIN_HELP = (
 PACE_MODEL_HELP = (
     "the game times each kart by its pace measured in clean air this race (ours, not the paper's: one model of "
     "the kart for everyone sees nothing to gain behind a slower kart)"
+)
+HOLD_GAIN_HELP = (
+    "a plan that left the racing line (a pass under way) is kept while its lanes still gain this much on the "
+    "line's and no less than the new plan's less 0.05 s (ours, not the paper's: re-planned afresh every second, "
+    "a pass was given up half way)"
 )
 OWN_PACE_HELP = "the ego's pace (its section times over the racing line's) until it has been measured in clean air"
 MAX_SQUEEZE_LOOKAHEAD = (
@@ -101,6 +107,7 @@ class MCTSPlanner:
         racing_line: bool = True,
         lane_change_slack: int = 0,
         deviation_gain: float | None = DEVIATION_GAIN,
+        hold_gain: float | None = None,
         planned_speeds_behind: bool = True,
         pace_model: bool = False,
         own_pace: float = 1.0,
@@ -109,6 +116,8 @@ class MCTSPlanner:
             raise ValueError("lane_change_slack must be >= 0")
         if deviation_gain is not None and deviation_gain < 0:
             raise ValueError("deviation_gain must be >= 0 (or None)")
+        if hold_gain is not None and (hold_gain < 0 or deviation_gain is None):
+            raise ValueError("hold_gain must be >= 0 (or None) and needs deviation_gain")
         self.iterations = iterations
         self.rate_hz = rate_hz
         self.params = params or GameParams()
@@ -119,6 +128,9 @@ class MCTSPlanner:
         # [s] with the racing line on, the searched lanes replace the line's only when the game's playout of
         # them gains this much (:meth:`TacticalPlanner._line_unless_beaten`); None: the search's lanes always
         self.deviation_gain = deviation_gain
+        # [s] the previous plan's lanes, where they leave the line, are kept while they still gain this much on it
+        # (:meth:`TacticalPlanner._line_unless_beaten`); None: every plan chosen afresh
+        self.hold_gain = hold_gain
         # behind another kart a waypoint keeps the game's planned speed: the spacing of a tracker that keeps none
         # of its own (LQNG); off, the line's speed profile binds everywhere and the tracker keeps its distance
         # (the RL trackers' following shield)
@@ -136,16 +148,22 @@ class MCTSPlanner:
 
     @classmethod
     def from_settings(
-        cls, settings: TacticalSettings, *, lane_change_slack: int = 0, planned_speeds_behind: bool = True
+        cls,
+        settings: TacticalSettings,
+        *,
+        lane_change_slack: int = 0,
+        planned_speeds_behind: bool = True,
+        hold_gain: float | None = None,
     ) -> MCTSPlanner:
         """The planner of a registered controller's ``settings`` (with the racing-line default off, the
-        search's lanes always: ``deviation_gain`` None)."""
+        search's lanes always: ``deviation_gain`` and ``hold_gain`` None)."""
         return cls(
             iterations=settings.iterations,
             rate_hz=settings.planner_rate_hz,
             params=GameParams(horizon=settings.horizon),
             lane_change_slack=lane_change_slack,
             deviation_gain=settings.deviation_gain_s if settings.racing_line_default else None,
+            hold_gain=hold_gain if settings.racing_line_default else None,
             planned_speeds_behind=planned_speeds_behind,
             pace_model=settings.pace_model,
             own_pace=settings.own_pace,
@@ -173,6 +191,7 @@ class MCTSPlanner:
             lane_limit=self.lane_limit,
             line=self._line,
             deviation_gain=self.deviation_gain if self.racing_line else None,
+            hold_gain=self.hold_gain if self.racing_line else None,
         )
 
     def present_state(self, kart: KartView, now: float, ego: int) -> PlayerState:

@@ -23,6 +23,7 @@ DEFAULT_GREEDY = 0.8  # probability that a rollout move is the fastest legal one
 TREE_CAPACITY_PLANS = 8  # a reused tree grows for up to this many plans' budgets before it starts afresh
 PLAN_MIN_VISITS = 30  # a plan follows the search tree only through choices visited at least this often
 COMMIT_MARGIN = 0.02  # value (0.02 = 0.05 s at value_scale 1 s) a new lane must gain to replace a committed one
+HOLD_MARGIN = 0.05  # [s] a new choice must gain this much over a kept deviation from the racing line to replace it
 
 Move = tuple[int, int, np.ndarray]  # (row of the mover, action, the game state after the move)
 
@@ -62,12 +63,18 @@ class TacticalPlanner:
         lane_limit: int | None = None,
         line: RacingLine | None = None,
         deviation_gain: float | None = None,
+        hold_gain: float | None = None,
     ) -> None:
         if deviation_gain is not None and line is None:
             raise ValueError("deviation_gain needs the racing line")
+        if hold_gain is not None and deviation_gain is None:
+            raise ValueError("hold_gain needs deviation_gain")
         self.track = track
         # [s] the searched lanes replace the racing line's only when they gain this much over it (None: always)
         self.deviation_gain = deviation_gain
+        # [s] a previous plan that left the line is kept while it still gains this much over the line, and no
+        # less than the new choice less ``HOLD_MARGIN`` (None: every plan chosen afresh)
+        self.hold_gain = hold_gain
         self.params = params or GameParams()
         self.tables: GameTables = build_tables(track, kart, self.params, lane_limit)
         if line is not None:
@@ -240,7 +247,7 @@ class TacticalPlanner:
         tail, _ = self._playout(tree.state[path[-1]], int(tree.round[path[-1]]), root_cp, {})
         moves += tail
         if self.deviation_gain is not None:
-            moves = self._line_unless_beaten(tree.state[0], root_cp, moves)
+            moves = self._line_unless_beaten(tree.state[0], root_cp, moves, committed)
         for mover, action, states in moves:
             lane, vbin = divmod(action, bins)
             state = states[mover]
@@ -299,7 +306,9 @@ class TacticalPlanner:
             moves.append((p, int(action), after))
         return moves, True
 
-    def _line_unless_beaten(self, root: np.ndarray, root_cp: int, searched: list[Move]) -> list[Move]:
+    def _line_unless_beaten(
+        self, root: np.ndarray, root_cp: int, searched: list[Move], committed: dict[int, int] | None = None
+    ) -> list[Move]:
         """The ego on the racing line (the opponent model's own play for it) unless the searched lanes, played
         out the same way at each lane's fastest legal speed, gain ``deviation_gain`` on the others over it.
 
@@ -315,9 +324,30 @@ class TacticalPlanner:
             return searched
         lanes = {int(state[0, rules.CHECKPOINT]): action // bins for mover, action, state in searched if mover == 0}
         mine, complete = self._playout(root, root_cp, root_cp, lanes)
+        best = line
         if complete and _advantage(mine) >= _advantage(line) + self.deviation_gain * TIME_UNITS_PER_S:
-            return mine
-        return line
+            best = mine
+        if self.hold_gain is not None and committed:
+            kept = self._kept_deviation(root, root_cp, line, committed)
+            if kept is not None and _advantage(kept) >= max(
+                _advantage(line) + self.hold_gain * TIME_UNITS_PER_S,
+                _advantage(best) - HOLD_MARGIN * TIME_UNITS_PER_S,
+            ):
+                return kept
+        return best
+
+    def _kept_deviation(
+        self, root: np.ndarray, root_cp: int, line: list[Move], committed: dict[int, int]
+    ) -> list[Move] | None:
+        """The previous plan's lanes (``committed``, 1-based) played out from ``root`` when they leave the racing
+        line's lanes somewhere ahead (None otherwise, or when they cannot be driven to the horizon)."""
+        bins = len(self.tables.bin_low)
+        line_lanes = {int(state[0, rules.CHECKPOINT]): action // bins for mover, action, state in line if mover == 0}
+        lanes = {c: lane - 1 for c, lane in committed.items() if c > root_cp}
+        if not any(line_lanes.get(c, lane) != lane for c, lane in lanes.items()):
+            return None
+        kept, complete = self._playout(root, root_cp, root_cp, lanes)
+        return kept if complete else None
 
     def _pad(self, waypoints: list[Waypoint], root_cp: int, root_lane: int) -> int:
         """Fill the ego's plan to the horizon (a stuck ego: hold the lane at the lowest speed bin); returns how many
