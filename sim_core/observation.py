@@ -32,6 +32,8 @@ class KartView:
     crossing_speed: float  # [m/s]
     crossing_wear: float  # [-]
     finished: bool
+    lane_now: int = 0  # lane the kart is in now, with the referee's hysteresis (0: unknown)
+    lane_changes_now: int = 0  # eq. (10) counter as lane changes happen (the per-step rule's)
 
 
 @dataclass(frozen=True)
@@ -77,6 +79,8 @@ def kart_views(world: World, race: int) -> tuple[KartView, ...]:
                 crossing_speed=float(f[st.F_CROSS_SPEED]),
                 crossing_wear=float(f[st.F_CROSS_WEAR]),
                 finished=bool(i[st.I_FINISHED]),
+                lane_now=int(i[st.I_LANE_NOW]),
+                lane_changes_now=int(i[st.I_STEP_LANE_COUNT]),
             )
         )
     return tuple(views)

@@ -106,3 +106,18 @@ def test_a_faster_tactical_kart_passes_a_slower_one_by_the_rules(speed_scale: fl
     assert tactical.finish_time is not None and slow.finish_time is not None
     assert tactical.finish_time < slow.finish_time
     assert tactical.collisions_at_fault == 0 and tactical.illegal_lane_changes == 0
+
+
+@pytest.mark.parametrize("seed", [2, 6])
+def test_a_pass_under_way_is_finished_against_a_kart_7_percent_slower(seed: int) -> None:
+    """The same start against a kart at 93% of its speed targets, 2 laps: mcts-lqng must get by, win, and break
+    no rule. It did not until session 18 (0.30-0.37 s behind at the flag): it gave up a pass as soon as the next
+    plan preferred the line (now ``hold_gain_s`` keeps it), and it drove its passing lane blended toward the
+    line, in the other kart's wake, held back by station keeping (now ``pass_distance`` drives it exactly)."""
+    spec = RaceSpec(track="complex", controllers=("mcts-lqng", "fixed-lqng"), laps=2, seed=seed, start_lanes=(2, 3))
+    drivers = [make_controller("mcts-lqng"), make_controller("fixed-lqng", speed_scale=0.93)]
+    tactical, slow = run_race(spec, drivers=drivers).result.karts
+    assert tactical.passes >= 1
+    assert tactical.finish_time is not None and slow.finish_time is not None
+    assert tactical.finish_time < slow.finish_time
+    assert tactical.collisions_at_fault == 0 and tactical.illegal_lane_changes == 0

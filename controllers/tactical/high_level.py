@@ -213,14 +213,15 @@ class MCTSPlanner:
         lane = track.lane_id(checkpoint, kart.lateral)
         if kart.index == ego:
             lane = self._committed.get(checkpoint, lane)
-        count, _ = lane_change_update(
-            kart.lane_changes,
-            kart.lane,
-            lane,
-            track.section_is_straight(checkpoint - 1),
-            track.section_is_straight(checkpoint),
-            self._context.lane_change_limit,
-        )
+        straight = (track.section_is_straight(checkpoint - 1), track.section_is_straight(checkpoint))
+        limit = self._context.lane_change_limit
+        count, _ = lane_change_update(kart.lane_changes, kart.lane, lane, *straight, limit)
+        if kart.lane_now > 0:
+            # the referee counts lane changes as they happen (the default rule) or at checkpoint crossings; the
+            # two differ by a change made just past a change of road type, which the sampled count absorbs into
+            # its reset: plan with the stricter, or a plan to the limit breaks it by one
+            as_they_happen, _ = lane_change_update(kart.lane_changes_now, kart.lane_now, lane, *straight, limit)
+            count = max(count, as_they_happen)
         return PlayerState(
             kart=kart.index,
             checkpoint=checkpoint,

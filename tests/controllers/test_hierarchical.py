@@ -275,3 +275,22 @@ def test_the_roots_own_waypoint_keeps_its_predicted_speed_without_planned_speeds
     assert first.checkpoint == predicted.checkpoint == 6
     assert first.speed == predicted.speed < PAPER_KART.top_speed
     assert rest and all(w.speed == PAPER_KART.top_speed for w in rest)
+
+
+def test_the_roots_lane_change_count_is_the_stricter_of_the_referees_two() -> None:
+    """On complex's long straight (checkpoints 31-45), a kart whose counter as lane changes happen is ahead of the
+    one sampled at checkpoint crossings (a change made just past the curve's end, which the sampled count absorbs
+    into its reset) enters the game with the higher count, so a plan to the limit L breaks neither rule; a kart
+    whose present lane is unknown keeps the sampled count."""
+    checkpoint = 33
+    assert all(TRACK.section_is_straight(c) for c in (checkpoint, checkpoint + 1))
+    s = float(TRACK.checkpoint_s[checkpoint + 1]) - 5.0
+    lane_2, lane_3 = (float(TRACK.lane_offsets(checkpoint + 1)[lane - 1]) for lane in (2, 3))
+    base = replace(OBSERVATION.me, progress=s, lateral=lane_2, checkpoints_passed=checkpoint, lane=2, lane_changes=0)
+    ahead = replace(base, lane_now=2, lane_changes_now=3)
+    assert PLANNER.present_state(base, 0.0, 1).lane_changes == 0
+    assert PLANNER.present_state(ahead, 0.0, 1).lane_changes == 3
+    moving = replace(ahead, lateral=lane_3)
+    assert PLANNER.present_state(moving, 0.0, 1).lane == 3
+    assert PLANNER.present_state(moving, 0.0, 1).lane_changes == 4
+    assert PLANNER.present_state(replace(moving, lane_now=0), 0.0, 1).lane_changes == 1

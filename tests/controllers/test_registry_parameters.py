@@ -56,6 +56,7 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
         "lqng_horizon_steps": "4",
         "racing_line_default": "True",
         "deviation_gain_s": "0.1",
+        "hold_gain_s": "0.05",
         "pace_model": "True",
         "own_pace": "1.0",
     }
@@ -68,20 +69,28 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
 
 def test_overrides_reach_the_parts_that_use_them() -> None:
     driver = make_controller(
-        "mcts-lqng", iterations=300, horizon=5, planner_rate_hz=2, lqng_horizon_steps=6, deviation_gain_s=0.3
+        "mcts-lqng",
+        iterations=300,
+        horizon=5,
+        planner_rate_hz=2,
+        lqng_horizon_steps=6,
+        deviation_gain_s=0.3,
+        hold_gain_s=0.2,
     )
     assert isinstance(driver, HierarchicalController)
     assert isinstance(driver.planner, MCTSPlanner) and isinstance(driver.tracker, LQNGTracker)
     assert driver.planner.iterations == 300 and driver.planner.params.horizon == 5
     assert driver.planner.rate_hz == 2.0 and isinstance(driver.planner.rate_hz, float)
     assert driver.tracker.params.horizon == 6
-    assert driver.planner.deviation_gain == 0.3
+    assert driver.planner.deviation_gain == 0.3 and driver.planner.hold_gain == 0.2
     searched = make_controller("mcts-lqng", racing_line_default=False)
     assert isinstance(searched, HierarchicalController) and isinstance(searched.planner, MCTSPlanner)
     assert searched.planner.deviation_gain is None  # the search's lanes, as mcts-rl's by default
+    assert searched.planner.hold_gain is None  # nothing to hold without the racing line
     rl = make_controller("mcts-rl")
     assert isinstance(rl, HierarchicalController) and isinstance(rl.planner, MCTSPlanner)
     assert rl.planner.deviation_gain == 0.1  # the racing line unless the search gains, as mcts-lqng's
+    assert rl.planner.hold_gain is None  # every plan chosen afresh (mcts-lqng's pass commitment is its own)
     assert rl.planner.pace_model and rl.planner.own_pace == 1.0  # every kart at its measured pace
     assert not rl.planner.planned_speeds_behind  # its following shield keeps the distance
     paced = make_controller("mcts-lqng", own_pace=1.05)

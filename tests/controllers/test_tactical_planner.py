@@ -14,7 +14,14 @@ from controllers.tactical import rules
 from controllers.tactical.exact import optimal_first_moves, random_small_games
 from controllers.tactical.game import GameParams
 from controllers.tactical.mcts import SearchTree
-from controllers.tactical.planner import DEFAULT_EXPLORATION, DEFAULT_GREEDY, PlayerState, TacticalPlanner
+from controllers.tactical.planner import (
+    DEFAULT_EXPLORATION,
+    DEFAULT_GREEDY,
+    HOLD_MARGIN,
+    PlayerState,
+    TacticalPlanner,
+    _advantage,
+)
 from sim_core.params import PAPER_KART
 from sim_core.rules import lane_change_update
 from sim_core.track_io import get_track
@@ -215,3 +222,46 @@ def test_a_kart_behind_a_slower_one_on_the_line_leaves_the_line_to_pass() -> Non
     assert plan.ego_waypoints[0].lane != lanes[11]
     followed = [s for mover, _, s in following if mover == 0][-1]
     assert plan.ego_waypoints[-1].time * 100.0 <= followed[0, rules.TIME] - 10
+
+
+def test_a_pass_under_way_is_kept_while_it_still_gains_on_the_line() -> None:
+    """The oval's back straight, 0.3 s behind a line follower doing 8 m/s. The previous plan went by on the left
+    (lane 1, then 2): it still gains more than ``hold_gain`` on the line, so it is kept even when this plan's own
+    choice is the line (the game's play of it, which steps round the slow kart late); without ``hold_gain`` the
+    plan is chosen afresh. A previous plan that loses to the line (the far right lane all the way) or never
+    left it is not kept."""
+    track = TRACKS["oval"]
+    line = optimise_racing_line(track, PAPER_KART)
+    lanes = line.checkpoint_lanes
+    me = PlayerState(0, 10, lanes[10], 14.0, 0.3, 0.25, 0)
+    slow = PlayerState(1, 10, lanes[10], 8.0, 0.0, 0.25, 0, modelled=True)
+    planner = TacticalPlanner(track, PAPER_KART, iterations=10, seed=0, line=line, deviation_gain=0.1)
+    bins = len(planner.tables.bin_low)
+    root, _ = planner.root_state([me, slow], 0)
+    on_line, complete = planner._playout(root, 10, 10, None)
+    assert complete
+
+    def ego_lanes(moves: list[tuple[int, int, np.ndarray]]) -> list[int]:
+        return [action // bins + 1 for mover, action, _ in moves if mover == 0]
+
+    def chosen(hold_gain: float | None, previous: list[int]) -> list[tuple[int, int, np.ndarray]]:
+        planner.hold_gain = hold_gain
+        committed = {11 + i: lane for i, lane in enumerate(previous)}
+        return planner._line_unless_beaten(root, 10, on_line, committed)
+
+    by_the_left = [1, 2, 2, 2, 2, 2, 1, 2]
+    kept = chosen(0.05, by_the_left)
+    assert ego_lanes(kept) == by_the_left != ego_lanes(on_line)
+    assert _advantage(kept) >= _advantage(on_line) + 5  # 0.05 s in the game's 0.01 s units
+    assert ego_lanes(chosen(None, by_the_left)) == ego_lanes(on_line)
+    assert ego_lanes(chosen(0.05, [4] * 8)) == ego_lanes(on_line)
+    line_lanes = [lanes[c % track.n_checkpoints] for c in range(11, 19)]
+    assert ego_lanes(chosen(0.05, line_lanes)) == ego_lanes(on_line)
+    # a new choice better by more than the margin replaces a previous plan that still gains on the line:
+    # lane 1 for two checkpoints gains 0.09 s on the line, 0.1 s less than going by on the left at once
+    planner.hold_gain = 0.05
+    wider = {11 + i: lane for i, lane in enumerate([1, 1, 2, 2, 2, 2, 1, 2])}
+    assert ego_lanes(planner._line_unless_beaten(root, 10, kept, wider)) == by_the_left
+    assert _advantage(planner._playout(root, 10, 10, {c: lane - 1 for c, lane in wider.items()})[0]) < (
+        _advantage(kept) - HOLD_MARGIN * 100
+    )
