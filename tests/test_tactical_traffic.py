@@ -121,3 +121,17 @@ def test_a_pass_under_way_is_finished_against_a_kart_7_percent_slower(seed: int)
     assert tactical.finish_time is not None and slow.finish_time is not None
     assert tactical.finish_time < slow.finish_time
     assert tactical.collisions_at_fault == 0 and tactical.illegal_lane_changes == 0
+
+
+@pytest.mark.parametrize(("seed", "lanes"), [(615434538, (2, 3)), (1889878166, (2, 3))])
+def test_behind_a_faster_kart_it_makes_no_illegal_lane_change(seed: int, lanes: tuple[int, int]) -> None:
+    """Two races of the paper grid on the oval (session 18, commit b5babe2): behind mcts-rl or e2e, mcts-lqng drove
+    a lane a few metres behind the faster kart exactly, as if passing, and crossed a lane boundary early on the
+    straight before a curve: one illegal lane change each (38 such races in 400). Only a kart slower than the racing
+    line is passed in a lane driven exactly now."""
+    leader = "mcts-rl" if seed == 615434538 else "e2e"
+    spec = RaceSpec(track="oval", controllers=(leader, "mcts-lqng"), seed=seed, start_lanes=lanes)
+    faster, tactical = run_race(spec).result.karts
+    assert faster.finish_time is not None and tactical.finish_time is not None
+    assert faster.finish_time < tactical.finish_time
+    assert tactical.illegal_lane_changes == 0

@@ -73,11 +73,13 @@ class LQNGParams:
     # [m] with another kart closer than this along the track (alongside), planned lanes are driven exactly
     # (tolerance 0) whatever ``traffic_lane_tolerance`` says: two karts blending onto one line would touch
     alongside_distance: float = 0.0
-    # [m] on a straight, with a kart ahead closer than this along the track and the next waypoint's lane at least
-    # ``pass_clearance`` sideways from it, planned lanes are driven exactly too: the plan is a pass, and blending
+    # [m] on a straight, behind a kart closer than this along the track that is slower than the racing line there
+    # (by ``pass_speed_margin``), with the next waypoint's lane at least ``pass_clearance`` sideways from it, planned
+    # lanes are driven exactly too: the plan is a pass, and blending
     # toward the line would leave the kart in the other's wake, held back by station keeping; 0: off
     pass_distance: float = 0.0
     pass_clearance: float = 1.5  # [m]
+    pass_speed_margin: float = 0.3  # [m/s]
     # [1/s] the steering input changes at most this fast (lock to lock in 2/rate s); 0: unlimited. A full-lock
     # zig-zag between planned lanes is what traction control turns into braking
     steer_rate: float = 0.0
@@ -187,15 +189,21 @@ class LQNGTracker:
         return float(point[0] - tangent[1] * d), float(point[1] + tangent[0] * d), d
 
     def _passing(self, track: Track, me: KartView, others: list[KartView], plan: Plan | None) -> bool:
-        """Whether ``me`` is on a straight with a kart ahead within ``pass_distance`` that its next planned lane
-        clears sideways by ``pass_clearance``: a planned pass."""
+        """Whether ``me`` is on a straight behind a kart within ``pass_distance`` that drives slower than the racing
+        line's speed there (by ``pass_speed_margin``), and its next planned lane clears that kart sideways by
+        ``pass_clearance``: a planned pass. (Behind a kart at the line's pace a lane apart is just a line: driven
+        exactly, it crossed lanes early into the next curve, an illegal lane change. The kart's own speed says
+        nothing here: station keeping holds it to the other's.)"""
         p = self.params
+        assert self._line is not None
         if not track.section_is_straight(me.checkpoints_passed):
             return False
         first, _ = self._upcoming(track, me, plan, me.index)
         target = float(track.lane_offsets(first.checkpoint)[first.lane - 1])
         return any(
-            0.0 < track.gap(me.progress, k.progress) < p.pass_distance and abs(target - k.lateral) >= p.pass_clearance
+            0.0 < track.gap(me.progress, k.progress) < p.pass_distance
+            and k.speed < p.speed_scale * float(self._line.speed_at(k.progress)) - p.pass_speed_margin
+            and abs(target - k.lateral) >= p.pass_clearance
             for k in others
         )
 
