@@ -61,10 +61,15 @@ def main(track: str = "complex", races: int = 6, workers: int = 2) -> None:
     jobs = [(track, s, f, i) for s in ("shipped", "session16") for f in SCALES for i in range(races)]
     with ProcessPoolExecutor(workers) as pool:
         rows = list(pool.map(race, *zip(*jobs, strict=True)))
+    report(rows, ("shipped", "session16"), SCALES)
+
+
+def report(rows: list[dict[str, object]], settings: tuple[str, ...], scales: tuple[float, ...]) -> None:
+    """Print every race, then a JSON summary per setting and scale (mcts-lqng's figures)."""
     for row in rows:
         print(json.dumps(row))
-    for setting in ("shipped", "session16"):
-        for scale in SCALES:
+    for setting in settings:
+        for scale in scales:
             mine = [r for r in rows if r["setting"] == setting and r["scale"] == scale]
             summary = {
                 "setting": setting,
