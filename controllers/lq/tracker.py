@@ -75,8 +75,8 @@ class LQNGParams:
     alongside_distance: float = 0.0
     # [m] on a straight, behind a kart closer than this along the track that is slower than the racing line there
     # (by ``pass_speed_margin``), with the next waypoint's lane at least ``pass_clearance`` sideways from it, planned
-    # lanes are driven exactly too: the plan is a pass, and blending
-    # toward the line would leave the kart in the other's wake, held back by station keeping; 0: off
+    # lanes are driven exactly too: the plan is a pass, and blending toward the line would leave the kart in the
+    # other's wake, held back by station keeping; 0: off
     pass_distance: float = 0.0
     pass_clearance: float = 1.5  # [m]
     pass_speed_margin: float = 0.3  # [m/s]
@@ -198,14 +198,17 @@ class LQNGTracker:
         assert self._line is not None
         if not track.section_is_straight(me.checkpoints_passed):
             return False
+        slower = [
+            k
+            for k in others
+            if 0.0 < track.gap(me.progress, k.progress) < p.pass_distance
+            and k.speed < p.speed_scale * float(self._line.speed_at(k.progress)) - p.pass_speed_margin
+        ]
+        if not slower:
+            return False
         first, _ = self._upcoming(track, me, plan, me.index)
         target = float(track.lane_offsets(first.checkpoint)[first.lane - 1])
-        return any(
-            0.0 < track.gap(me.progress, k.progress) < p.pass_distance
-            and k.speed < p.speed_scale * float(self._line.speed_at(k.progress)) - p.pass_speed_margin
-            and abs(target - k.lateral) >= p.pass_clearance
-            for k in others
-        )
+        return any(abs(target - k.lateral) >= p.pass_clearance for k in slower)
 
     def _station_limit(self, kart: KartView, others: list[KartView], aim_offset: float) -> float:
         """Highest speed [m/s] that keeps station behind the nearest kart ahead in ``kart``'s path (inf: none):

@@ -318,12 +318,10 @@ class TacticalPlanner:
         "defend" (fixed-lqng went round the outside of complex-reversed's first hairpin). Both candidates are
         timed by the same deterministic playout, so the margin compares like with like."""
         assert self.deviation_gain is not None
-        bins = len(self.tables.bin_low)
         line, line_complete = self._playout(root, root_cp, root_cp, None)
         if not line_complete:
             return searched
-        lanes = {int(state[0, rules.CHECKPOINT]): action // bins for mover, action, state in searched if mover == 0}
-        mine, complete = self._playout(root, root_cp, root_cp, lanes)
+        mine, complete = self._playout(root, root_cp, root_cp, self._ego_lanes(searched))
         best = line
         if complete and _advantage(mine) >= _advantage(line) + self.deviation_gain * TIME_UNITS_PER_S:
             best = mine
@@ -341,13 +339,17 @@ class TacticalPlanner:
     ) -> list[Move] | None:
         """The previous plan's lanes (``committed``, 1-based) played out from ``root`` when they leave the racing
         line's lanes somewhere ahead (None otherwise, or when they cannot be driven to the horizon)."""
-        bins = len(self.tables.bin_low)
-        line_lanes = {int(state[0, rules.CHECKPOINT]): action // bins for mover, action, state in line if mover == 0}
+        line_lanes = self._ego_lanes(line)
         lanes = {c: lane - 1 for c, lane in committed.items() if c > root_cp}
         if not any(line_lanes.get(c, lane) != lane for c, lane in lanes.items()):
             return None
         kept, complete = self._playout(root, root_cp, root_cp, lanes)
         return kept if complete else None
+
+    def _ego_lanes(self, moves: list[Move]) -> dict[int, int]:
+        """The ego's (row 0) 0-based lane at each checkpoint it reaches in ``moves``."""
+        bins = len(self.tables.bin_low)
+        return {int(state[0, rules.CHECKPOINT]): action // bins for mover, action, state in moves if mover == 0}
 
     def _pad(self, waypoints: list[Waypoint], root_cp: int, root_lane: int) -> int:
         """Fill the ego's plan to the horizon (a stuck ego: hold the lane at the lowest speed bin); returns how many

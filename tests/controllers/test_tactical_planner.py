@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as hs
 
-from controllers.racing_line import optimise_racing_line
+from controllers.racing_line import RacingLine, optimise_racing_line
 from controllers.tactical import rules
 from controllers.tactical.exact import optimal_first_moves, random_small_games
 from controllers.tactical.game import GameParams
@@ -24,6 +24,7 @@ from controllers.tactical.planner import (
 )
 from sim_core.params import PAPER_KART
 from sim_core.rules import lane_change_update
+from sim_core.track import Track
 from sim_core.track_io import get_track
 
 TRACKS = {name: get_track(name) for name in ("oval", "complex")}
@@ -206,14 +207,22 @@ def test_alone_with_a_line_margin_the_plan_is_the_racing_line() -> None:
     assert differ > 0
 
 
+def _behind_a_slow_kart_on_the_oval() -> tuple[Track, RacingLine, PlayerState, PlayerState]:
+    """The oval, its racing line, and the ego 0.3 s behind a line follower doing 8 m/s at checkpoint 10 (the back
+    straight), at 14 m/s, both in the line's lane."""
+    track = TRACKS["oval"]
+    line = optimise_racing_line(track, PAPER_KART)
+    lane = line.checkpoint_lanes[10]
+    me = PlayerState(0, 10, lane, 14.0, 0.3, 0.25, 0)
+    slow = PlayerState(1, 10, lane, 8.0, 0.0, 0.25, 0, modelled=True)
+    return track, line, me, slow
+
+
 def test_a_kart_behind_a_slower_one_on_the_line_leaves_the_line_to_pass() -> None:
     """0.3 s behind a line follower doing 8 m/s on the oval's back straight, at 14 m/s: staying on the line
     means braking behind it, so the searched lanes gain more than the margin and replace the line's."""
-    track = TRACKS["oval"]
-    line = optimise_racing_line(track, PAPER_KART)
+    track, line, me, slow = _behind_a_slow_kart_on_the_oval()
     lanes = line.checkpoint_lanes
-    me = PlayerState(0, 10, lanes[10], 14.0, 0.3, 0.25, 0)
-    slow = PlayerState(1, 10, lanes[10], 8.0, 0.0, 0.25, 0, modelled=True)
     planner = TacticalPlanner(track, PAPER_KART, iterations=2000, seed=1, line=line, deviation_gain=0.1)
     root, _ = planner.root_state([me, slow], 0)
     following, complete = planner._playout(root, 10, 10, None)
@@ -230,11 +239,8 @@ def test_a_pass_under_way_is_kept_while_it_still_gains_on_the_line() -> None:
     choice is the line (the game's play of it, which steps round the slow kart late); without ``hold_gain`` the
     plan is chosen afresh. A previous plan that loses to the line (the far right lane all the way) or never
     left it is not kept."""
-    track = TRACKS["oval"]
-    line = optimise_racing_line(track, PAPER_KART)
+    track, line, me, slow = _behind_a_slow_kart_on_the_oval()
     lanes = line.checkpoint_lanes
-    me = PlayerState(0, 10, lanes[10], 14.0, 0.3, 0.25, 0)
-    slow = PlayerState(1, 10, lanes[10], 8.0, 0.0, 0.25, 0, modelled=True)
     planner = TacticalPlanner(track, PAPER_KART, iterations=10, seed=0, line=line, deviation_gain=0.1)
     bins = len(planner.tables.bin_low)
     root, _ = planner.root_state([me, slow], 0)
