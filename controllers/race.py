@@ -18,6 +18,9 @@ from sim_core.track import Track
 from sim_core.track_io import get_track, load_track
 from sim_core.world import RaceResult, World
 
+MAX_START_SPREAD = 2.0  # [s]
+START_SPREAD_STREAM = 0x57A27  # keeps the launch delays' random stream apart from any other use of the seed
+
 
 @dataclass(frozen=True)
 class RaceSpec:
@@ -31,6 +34,22 @@ class RaceSpec:
     kart_preset: str = "paper"
     plan_latency: float = 0.1  # [s] simulated delay between requesting and applying a high-level plan
     time_limit: float | None = None  # [s] end the race then (None: the rules' limit)
+    # [s] each kart launches after a delay drawn from the seed, uniform in [0, start_spread) (a driver's reaction
+    # to the lights); 0: every kart launches at once, as in the paper's experiments
+    start_spread: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.start_spread <= MAX_START_SPREAD:
+            raise ValueError(f"start_spread must be in [0, {MAX_START_SPREAD}] s, got {self.start_spread}")
+
+    def start_delays(self) -> tuple[float, ...]:
+        """Each kart's launch delay [s]: a function of the seed and the number of karts alone, so two series with
+        the same seeds and different drivers see the same starts (a paired comparison)."""
+        n = len(self.controllers)
+        if self.start_spread == 0.0:
+            return (0.0,) * n
+        rng = np.random.default_rng([self.seed, START_SPREAD_STREAM])
+        return tuple(float(d) for d in rng.uniform(0.0, self.start_spread, n))
 
 
 @dataclass(frozen=True)
@@ -42,6 +61,7 @@ class RaceOutcome:
     wall_seconds: float
     replay: Replay | None
     lap_times: tuple[tuple[float, ...], ...] = ()  # [s] each kart's completed laps, by kart index
+    start_delays: tuple[float, ...] = ()  # [s] each kart's launch delay (:meth:`RaceSpec.start_delays`)
 
 
 def load_any_track(name: str) -> Track:
@@ -86,6 +106,7 @@ def run_race(
     if recorder is not None:
         recorder.allocate(round(params.rules.time_limit / DT) + 1)
     actions = np.zeros((1, n, 2))
+    delays = spec.start_delays()
     hold = [max(1, round(1.0 / (DT * d.rate_hz))) for d in drivers]
     applied = [0] * n
     laps = LapTimer(n, track.n_checkpoints)
@@ -94,15 +115,16 @@ def run_race(
     while not world.done[0]:
         observations = observe(world, 0)
         for k, driver in enumerate(drivers):
-            if step % hold[k] == 0 and not observations[k].me.finished:
+            waiting = step * DT < delays[k]
+            launching = not waiting and (step - 1) * DT < delays[k]  # the first step after its delay: decide now
+            if (step % hold[k] == 0 or launching) and not observations[k].me.finished:
                 action = driver.act(observations[k])
                 actions[0, k] = (action.steer, action.throttle)
                 if isinstance(driver, PlanningDriver) and driver.plans_applied != applied[k]:
                     applied[k] = driver.plans_applied
-                    if driver.active_plan is not None:
-                        apply_plan_targets(world, 0, k, driver.active_plan)
-                        if recorder is not None:
-                            recorder.plan(step, k, driver.active_plan)
+                    _show_plan(world, k, driver, recorder, step)
+            if waiting:
+                actions[0, k] = (0.0, 0.0)  # standing (negative throttle reverses); its driver plans all the same
         world.step(actions)
         laps.observe(world)
         if on_step is not None:
@@ -112,4 +134,13 @@ def run_race(
         step += 1
     wall = time.perf_counter() - t0
     replay = None if recorder is None else recorder.replay()
-    return RaceOutcome(spec, world.result(0), wall, replay, laps.all_lap_times())
+    return RaceOutcome(spec, world.result(0), wall, replay, laps.all_lap_times(), delays)
+
+
+def _show_plan(world: World, kart: int, driver: PlanningDriver, recorder: ReplayRecorder | None, step: int) -> None:
+    """Put a newly applied plan's targets in the world (for views and metrics) and in the replay."""
+    if driver.active_plan is None:
+        return
+    apply_plan_targets(world, 0, kart, driver.active_plan)
+    if recorder is not None:
+        recorder.plan(step, kart, driver.active_plan)

@@ -4,7 +4,9 @@ per-race figures summed up. Prints one line per race and a JSON summary as the l
     .venv/bin/python scripts/head_to_head.py --track complex --karts mcts-lqng,fixed-lqng --races 50
 
 ``--workers N`` races N at a time in separate processes; every race is seeded, so the lines and the summary are
-the same as one process gives, in the same order.
+the same as one process gives, in the same order. ``--start-spread S`` launches each kart after a delay drawn from
+the race's seed, uniform in [0, S) seconds (:meth:`controllers.race.RaceSpec.start_delays`): the same delays for
+any pair of controllers, so a series against a control pair is a paired comparison.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from dataclasses import dataclass
 
 import typer
 
-from controllers.race import RaceSpec, run_race
+from controllers.race import MAX_START_SPREAD, RaceSpec, run_race
 from controllers.race_metrics import RaceMetrics
 from sim_core.world import RaceResult
 
@@ -32,13 +34,15 @@ class RaceRun:
     right: tuple[int, ...]  # per kart: opponent lane predictions that came true
     judged: tuple[int, ...]  # per kart: predictions judged
     shortest: tuple[int, ...]  # per kart: fewest ego waypoints of an applied tactical plan (99: none)
+    delays: tuple[float, ...] = ()  # [s] per kart: launch delay
 
 
-def race_once(track: str, names: tuple[str, ...], index: int, seed: int) -> RaceRun:
+def race_once(track: str, names: tuple[str, ...], index: int, seed: int, start_spread: float = 0.0) -> RaceRun:
     """Race ``names`` on ``track``: kart 0 starts in lane 2 when ``index`` is even, lane 3 when odd."""
     lanes = (2, 3) if index % 2 == 0 else (3, 2)
     metrics = RaceMetrics(len(names))
-    outcome = run_race(RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes), on_step=metrics)
+    spec = RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes, start_spread=start_spread)
+    outcome = run_race(spec, on_step=metrics)
     right, judged = [0] * len(names), [0] * len(names)
     for predictor, predicted, checkpoint, lane in metrics.predictions:
         actual = metrics.crossings.get((predicted, checkpoint))
@@ -46,7 +50,7 @@ def race_once(track: str, names: tuple[str, ...], index: int, seed: int) -> Race
             judged[predictor] += 1
             right[predictor] += int(actual == lane)
     shortest = tuple(metrics.shortest_plan.get(k, 99) for k in range(len(names)))
-    return RaceRun(index, seed, lanes, outcome.result, tuple(right), tuple(judged), shortest)
+    return RaceRun(index, seed, lanes, outcome.result, tuple(right), tuple(judged), shortest, outcome.start_delays)
 
 
 app = typer.Typer(add_completion=False)
@@ -59,11 +63,16 @@ def main(
     races: int = typer.Option(50, min=1),
     first_seed: int = typer.Option(0),
     workers: int = typer.Option(1, min=1, help="races run at a time, each in its own process"),
+    start_spread: float = typer.Option(
+        0.0, min=0.0, max=MAX_START_SPREAD, help="[s] launch delays drawn uniform in [0, S) from each race's seed"
+    ),
 ) -> None:
     """Race ``karts`` ``races`` times; kart 0 starts in lane 2 in even races and lane 3 in odd ones."""
     names = tuple(karts.split(","))
     if len(names) != 2:
         raise typer.BadParameter("give exactly two controllers")
+    # a controller against itself (a control series) is told apart by kart
+    labels = names if names[0] != names[1] else tuple(f"{name}#{k}" for k, name in enumerate(names))
     wins = [0, 0]
     finished = [0, 0]
     per_kart: list[dict[str, list[float]]] = [
@@ -84,7 +93,7 @@ def main(
     seeds = [first_seed + i for i in range(races)]
     with ProcessPoolExecutor(workers) as pool:
         mapper = pool.map if workers > 1 else map
-        for run in mapper(race_once, [track] * races, [names] * races, range(races), seeds):
+        for run in mapper(race_once, [track] * races, [names] * races, range(races), seeds, [start_spread] * races):
             result = run.result
             for k in range(len(names)):
                 right[k] += run.right[k]
@@ -114,18 +123,20 @@ def main(
                 f"p{kart.passes}"
                 for k, kart in enumerate(result.karts)
             ]
+            launch = f" delays {'/'.join(f'{d:.3f}' for d in run.delays)}" if start_spread > 0 else ""
             print(
-                f"race {run.index:3d} seed {run.seed} lanes {run.lanes} winner {result.winner} | "
+                f"race {run.index:3d} seed {run.seed} lanes {run.lanes}{launch} winner {result.winner} | "
                 + " | ".join(figures),
                 flush=True,
             )
     summary: dict[str, object] = {
         "track": track,
         "races": races,
-        "wins": dict(zip(names, wins, strict=True)),
-        "completion": dict(zip(names, [f / races for f in finished], strict=True)),
+        "start_spread": start_spread,
+        "wins": dict(zip(labels, wins, strict=True)),
+        "completion": dict(zip(labels, [f / races for f in finished], strict=True)),
     }
-    for k, name in enumerate(names):
+    for k, name in enumerate(labels):
         stats = per_kart[k]
         totals: dict[str, float | int | None] = {
             key: round(statistics.fmean(values), 3) if values else None for key, values in stats.items()
