@@ -40,6 +40,7 @@ class RaceJob:
     kart_preset: str = "paper"
     plan_latency: float = 0.1  # [s]
     background_planners: tuple[str, ...] = ()  # agents given an MCTS planner in the background (Δr, Δv only)
+    start_spread: float = 0.0  # [s] launch delays drawn from the seed (:attr:`controllers.race.RaceSpec.start_spread`)
 
     def spec(self) -> RaceSpec:
         """The headless race to run."""
@@ -52,6 +53,7 @@ class RaceJob:
             kart_preset=self.kart_preset,
             plan_latency=self.plan_latency,
             time_limit=self.time_limit,
+            start_spread=self.start_spread,
         )
 
 

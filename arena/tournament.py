@@ -27,7 +27,7 @@ import numpy as np
 from arena.lifeline import die_with_parent
 from arena.race import FinishedRace, RaceJob, run_job
 from arena.records import RaceFigures
-from controllers.race import load_any_track
+from controllers.race import MAX_START_SPREAD, load_any_track
 from controllers.registry import controller_names
 
 log = logging.getLogger(__name__)
@@ -51,6 +51,9 @@ class TournamentSpec:
     plan_latency: float = 0.1  # [s]
     # agents without a planner given the MCTS planner in the background for their Δr / Δv (as the paper's E2E)
     background_planners: tuple[str, ...] = ("e2e",)
+    # [s] each kart launches after a delay drawn from its race's seed, uniform in [0, start_spread): races with a
+    # spread, which a start lane alone does not decide (0: the paper's simultaneous starts)
+    start_spread: float = 0.0
 
     def problems(self) -> dict[str, str]:
         """What is wrong with this spec, by field (empty: nothing)."""
@@ -71,6 +74,8 @@ class TournamentSpec:
             found["tracks"] = f"unknown tracks {bad_tracks}" if bad_tracks else "give one or more tracks"
         if self.races_per_pair < 1:
             found["races_per_pair"] = f"races_per_pair must be >= 1, got {self.races_per_pair}"
+        if not 0.0 <= self.start_spread <= MAX_START_SPREAD:
+            found["start_spread"] = f"start_spread must be in [0, {MAX_START_SPREAD}] s, got {self.start_spread}"
         return found
 
     def validate(self) -> TournamentSpec:
@@ -105,6 +110,7 @@ class TournamentSpec:
                         self.kart_preset,
                         self.plan_latency,
                         tuple(agent for agent in (a, b) if agent in self.background_planners),
+                        self.start_spread,
                     )
                     jobs.append(job)
         return jobs

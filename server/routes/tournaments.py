@@ -20,6 +20,7 @@ from arena.records import RaceFigures
 from arena.report import METRIC_TITLES, plan_rows, plot_stems, safety_rows, win_rows
 from arena.stats import COMBINED, Standing, leaderboard, tournament_stats
 from arena.tournament import TournamentSpec
+from controllers.race import MAX_START_SPREAD
 from server.deps import API_KEY_RESPONSES, ApiKey, TournamentPlotsDep, Tournaments
 from server.limits import MAX_SEED
 from server.models import ErrorOut, Name
@@ -45,6 +46,12 @@ class TournamentIn(BaseModel):
     laps: int | None = Field(default=None, ge=1, le=20, description="default: each track's")
     time_limit: float | None = Field(default=None, gt=0.0, le=3600.0, description="[s] default: the rules'")
     kart_preset: str = Field(default="paper", pattern="^(paper|original)$")
+    start_spread: float = Field(
+        default=0.0,
+        ge=0.0,
+        le=MAX_START_SPREAD,
+        description="[s] each kart launches after a delay drawn from its race's seed, uniform in [0, start_spread)",
+    )
     id: str | None = Field(default=None, pattern=TOURNAMENT_ID.pattern, description="default: a new id")
 
     @field_validator("id")
@@ -148,6 +155,7 @@ def _spec(body: TournamentIn) -> TournamentSpec:
         body.laps,
         body.time_limit,
         body.kart_preset,
+        start_spread=body.start_spread,
     )
     problems = spec.problems()
     if problems:

@@ -53,6 +53,17 @@ def test_a_spec_names_every_problem() -> None:
     with pytest.raises(ValueError, match="schumacher"):
         TournamentSpec(agents=("fixed-lqng", "schumacher")).validate()
     assert TournamentSpec.from_json(json.loads(json.dumps(SMALL.to_json()))) == SMALL
+    assert "start_spread" in TournamentSpec(agents=("fixed-lqng", "e2e"), start_spread=2.5).problems()
+
+
+def test_a_spread_start_reaches_every_race_and_old_specs_read_back_without_one() -> None:
+    spread = TournamentSpec(agents=("a", "b"), tracks=("oval",), races_per_pair=3, start_spread=0.25)
+    jobs = spread.jobs()
+    assert all(j.start_spread == 0.25 and j.spec().start_spread == 0.25 for j in jobs)
+    delays = [j.spec().start_delays() for j in jobs]
+    assert all(0.0 <= d < 0.25 for pair in delays for d in pair) and len(set(delays)) == 3
+    stored_before_the_spread = {k: v for k, v in SMALL.to_json().items() if k != "start_spread"}
+    assert TournamentSpec.from_json(stored_before_the_spread) == SMALL and SMALL.start_spread == 0.0
 
 
 def test_a_reduced_grid_in_worker_processes_equals_the_same_grid_run_inline() -> None:
