@@ -135,3 +135,17 @@ def test_behind_a_faster_kart_it_makes_no_illegal_lane_change(seed: int, lanes: 
     assert faster.finish_time is not None and tactical.finish_time is not None
     assert faster.finish_time < tactical.finish_time
     assert tactical.illegal_lane_changes == 0
+
+
+@pytest.mark.parametrize("seed", [60, 80])
+def test_from_a_spread_start_it_spends_no_more_lane_changes_than_the_rule_allows(seed: int) -> None:
+    """Two races of session 19's spread-start series on complex (start spread 0.5 s, lane 2): with its four lane
+    changes of the back straight spent, mcts-lqng's tracker blended toward the next curve's lane and crossed into it
+    a few metres before the curve began, one illegal lane change each. The lane-rule guard holds its aim in its lane
+    there."""
+    spec = RaceSpec(
+        track="complex", controllers=("mcts-lqng", "fixed-lqng"), seed=seed, start_lanes=(2, 3), start_spread=0.5
+    )
+    tactical, line = run_race(spec).result.karts
+    assert tactical.finish_time is not None and line.finish_time is not None
+    assert tactical.illegal_lane_changes == 0 and tactical.collisions_at_fault == 0

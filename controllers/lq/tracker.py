@@ -95,6 +95,11 @@ class LQNGParams:
     # [m] a kart less than this ahead is alongside, not ahead (the referee's alongside rule): lane discipline,
     # not braking, keeps the two apart
     follow_min_ahead: float = 1.0
+    # on a straight with its lane changes spent (eq. (11) gen_lane_lim, counted as they happen), steer for no point
+    # beyond the lanes the changes left reach, ``lane_guard_margin`` [m] short of the boundary: blending toward
+    # the line and the next curve's lane otherwise crosses a boundary before the curve begins
+    lane_rule_guard: bool = False
+    lane_guard_margin: float = 0.2
     # fraction of its speed targets the kart drives at (its top speed included): 1 is all out, under 1 a
     # handicapped, uniformly slower kart (an opponent to test passing against)
     speed_scale: float = 1.0
@@ -110,7 +115,9 @@ class LQNGParams:
 # followed a kart 15% slower home on complex; now it passes one 10% slower (8% slower in half the starts), and
 # every race against an equal kart ends as before (results/issue11/session17/README.md). A pass planned on a straight
 # (the next lane clear of the kart ahead by 1.5 m, within 10 m of it) is driven exactly: blended toward the line it
-# stayed in the other's wake, held back by station keeping (results/issue11/session18/README.md)
+# stayed in the other's wake, held back by station keeping (results/issue11/session18/README.md). With its lane changes
+# of a straight spent, it steers for no other lane before the curve: races from a spread start crossed into the
+# next curve's lane a few metres early, an illegal lane change (results/issue11/session19/README.md)
 MCTS_TRACKING = LQNGParams(
     speed_margin=3.0,
     traffic_lane_tolerance=1.25,
@@ -121,6 +128,7 @@ MCTS_TRACKING = LQNGParams(
     follow_band=1.0,
     follow_path_band=1.2,
     steer_rate=5.0,
+    lane_rule_guard=True,
 )
 # ``fixed-lqng``: the original's heading weight and avoidance scale with the fixed line (1.9, 0.45), a stronger
 # denial, and the line's own lanes followed to within ``lane_tolerance`` in traffic as well
@@ -161,10 +169,16 @@ class LQNGTracker:
         return ahead[0], ahead[1]
 
     def _aim(
-        self, track: Track, kart: KartView, first: Waypoint, second: Waypoint, tolerance: float
+        self,
+        track: Track,
+        kart: KartView,
+        first: Waypoint,
+        second: Waypoint,
+        tolerance: float,
+        bounds: tuple[float, float] | None = None,
     ) -> tuple[float, float, float]:
         """Pure-pursuit aim point (x, y) on the path blending the kart's lateral offset into the waypoints' lanes,
-        and its lateral offset from the centre line [m]."""
+        and its lateral offset from the centre line [m], held within ``bounds`` (lowest, highest offset) if given."""
         p = self.params
         lookahead = max(p.min_lookahead, abs(kart.speed) * p.lookahead_time)
         n = track.n_checkpoints
@@ -185,8 +199,29 @@ class LQNGTracker:
         else:
             correction = c1 + (c2 - c1) * min((lookahead - s1) / max(s2 - s1, 1e-6), 1.0)
         d = float(line.offset_at(aim_s)) + correction
+        if bounds is not None:
+            d = min(max(d, bounds[0]), bounds[1])
         point, tangent = track.point_at(aim_s)
         return float(point[0] - tangent[1] * d), float(point[1] + tangent[0] * d), d
+
+    def _lane_rule_bounds(self, track: Track, kart: KartView) -> tuple[float, float] | None:
+        """(lowest, highest) lateral offset [m] the kart may steer for on the straight it drives without breaking
+        eq. (11) gen_lane_lim: within the lanes its remaining changes reach from the lane it is in (the referee's
+        count as changes happen), ``lane_guard_margin`` inside their outer boundaries. None: the guard is off, the
+        kart is on a curve (no limit there), or every lane is within reach."""
+        p = self.params
+        assert self._context is not None
+        if not p.lane_rule_guard or kart.lane_now <= 0 or not track.section_is_straight(kart.checkpoints_passed):
+            return None
+        spare = max(self._context.lane_change_limit - kart.lane_changes_now, 0)
+        offsets = track.lane_offsets(kart.checkpoints_passed + 1)  # lane 1 leftmost: offsets fall with the lane id
+        lanes = len(offsets)
+        leftmost, rightmost = max(1, kart.lane_now - spare), min(lanes, kart.lane_now + spare)
+        if leftmost == 1 and rightmost == lanes:
+            return None
+        highest = math.inf if leftmost == 1 else 0.5 * float(offsets[leftmost - 1] + offsets[leftmost - 2])
+        lowest = -math.inf if rightmost == lanes else 0.5 * float(offsets[rightmost - 1] + offsets[rightmost])
+        return lowest + p.lane_guard_margin, highest - p.lane_guard_margin
 
     def _passing(self, track: Track, me: KartView, others: list[KartView], plan: Plan | None) -> bool:
         """Whether ``me`` is on a straight behind a kart within ``pass_distance`` that drives slower than the racing
@@ -265,7 +300,8 @@ class LQNGTracker:
             # positions relative to the ego kart keep the numbers small
             x0[STATE_SIZE * i : STATE_SIZE * i + 3] = (k.x - me.x, k.y - me.y, k.speed)
             first, second = self._upcoming(track, k, plan, k.index)
-            ax, ay, aim_offset = self._aim(track, k, first, second, tolerance)
+            bounds = self._lane_rule_bounds(track, k) if i == 0 else None
+            ax, ay, aim_offset = self._aim(track, k, first, second, tolerance, bounds)
             heading_error = math.remainder(math.atan2(ay - k.y, ax - k.x) - k.heading, 2.0 * math.pi)
             speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
             if i == 0:

@@ -140,3 +140,37 @@ def test_a_pass_planned_on_a_straight_is_driven_in_its_lane() -> None:
     c = float(track.checkpoint_s[curve]) + 2.0
     assert not passing(_on_oval(0, c, 1.25, curve), _on_oval(1, c + 6.0, 1.25, curve, speed=12.0), 3, curve + 1)
     assert MCTS_TRACKING.pass_clearance == 1.5
+
+
+def test_with_its_lane_changes_spent_on_a_straight_it_steers_for_no_other_lane() -> None:
+    """mcts-lqng's lane-rule guard: on a straight with k of the rule's L changes left, the aim stays within the
+    lanes k changes reach from the lane the kart is in, 0.2 m inside their outer boundaries; on a curve (no limit
+    there), with every lane in reach, or with the guard off, it is free. The aim itself is clamped."""
+    track = get_track("oval")
+    limit = track.lane_change_limit
+    straight = 11  # the oval's back straight runs from checkpoint 10 to 16
+    assert track.section_is_straight(straight) and not track.section_is_straight(8)
+    offsets = track.lane_offsets(straight + 1)
+    boundary_1_2, boundary_2_3, boundary_3_4 = (0.5 * float(offsets[i] + offsets[i + 1]) for i in range(3))
+    margin = MCTS_TRACKING.lane_guard_margin
+
+    def bounds(lane: int, changes: int, passed: int = straight, params: LQNGParams = MCTS_TRACKING):  # type: ignore[no-untyped-def]
+        me = replace(_on_oval(0, float(track.checkpoint_s[passed]) + 3.0, 1.25, passed), lane_now=lane)
+        tracker = LQNGTracker(params)
+        tracker.reset(RaceContext(track, PAPER_KART, 0, 2, limit, 0))
+        return tracker._lane_rule_bounds(track, replace(me, lane_changes_now=changes))
+
+    assert bounds(2, limit) == (boundary_2_3 + margin, boundary_1_2 - margin)  # spent: its own lane only
+    assert bounds(2, limit + 1) == (boundary_2_3 + margin, boundary_1_2 - margin)
+    assert bounds(2, limit - 1) == (boundary_3_4 + margin, math.inf)  # one left: lanes 1 to 3
+    assert bounds(1, limit - 1) == (boundary_2_3 + margin, math.inf)
+    assert bounds(2, limit - 2) is None  # every lane in reach
+    assert bounds(2, limit, passed=8) is None  # a curve
+    assert bounds(2, limit, params=replace(MCTS_TRACKING, lane_rule_guard=False)) is None
+    tracker = LQNGTracker(MCTS_TRACKING)
+    tracker.reset(RaceContext(track, PAPER_KART, 0, 2, limit, 0))
+    me = _on_oval(0, float(track.checkpoint_s[straight]) + 3.0, 1.25, straight)
+    far_right = Waypoint(straight + 1, 4, tuple(track.lane_point(straight + 1, 4)), 15.0, 0.0)  # type: ignore[arg-type]
+    _, _, free = tracker._aim(track, me, far_right, far_right, 0.0)
+    _, _, held = tracker._aim(track, me, far_right, far_right, 0.0, (boundary_2_3 + margin, boundary_1_2 - margin))
+    assert free < boundary_2_3 and held == boundary_2_3 + margin
