@@ -137,14 +137,19 @@ def test_behind_a_faster_kart_it_makes_no_illegal_lane_change(seed: int, lanes: 
     assert tactical.illegal_lane_changes == 0
 
 
-@pytest.mark.parametrize("seed", [60, 80])
-def test_from_a_spread_start_it_spends_no_more_lane_changes_than_the_rule_allows(seed: int) -> None:
-    """Two races of session 19's spread-start series on complex (start spread 0.5 s, lane 2): with its four lane
-    changes of the back straight spent, mcts-lqng's tracker blended toward the next curve's lane and crossed into it
-    a few metres before the curve began, one illegal lane change each. The lane-rule guard holds its aim in its lane
-    there."""
+@pytest.mark.parametrize(
+    ("track", "seed", "spread"), [("complex", 60, 0.5), ("complex", 80, 0.5), ("complex-reversed", 58, 0.25)]
+)
+def test_from_a_spread_start_it_spends_no_more_lane_changes_than_the_rule_allows(
+    track: str, seed: int, spread: float
+) -> None:
+    """Races of session 19's spread-start series, mcts-lqng from lane 2. On complex, with its four lane changes of
+    the back straight spent, its tracker blended toward the next curve's lane and crossed into it a few metres
+    before the curve began: one illegal lane change each. The lane-rule guard keeps the kart in reach of its lanes
+    until the curve; a guard that held the aim in the lane outright made it turn into complex-reversed's first
+    hairpin late, into the kart beside it (a collision at fault)."""
     spec = RaceSpec(
-        track="complex", controllers=("mcts-lqng", "fixed-lqng"), seed=seed, start_lanes=(2, 3), start_spread=0.5
+        track=track, controllers=("mcts-lqng", "fixed-lqng"), seed=seed, start_lanes=(2, 3), start_spread=spread
     )
     tactical, line = run_race(spec).result.karts
     assert tactical.finish_time is not None and line.finish_time is not None

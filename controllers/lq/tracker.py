@@ -206,9 +206,14 @@ class LQNGTracker:
 
     def _lane_rule_bounds(self, track: Track, kart: KartView) -> tuple[float, float] | None:
         """(lowest, highest) lateral offset [m] the kart may steer for on the straight it drives without breaking
-        eq. (11) gen_lane_lim: within the lanes its remaining changes reach from the lane it is in (the referee's
-        count as changes happen), ``lane_guard_margin`` inside their outer boundaries. None: the guard is off, the
-        kart is on a curve (no limit there), or every lane is within reach."""
+        eq. (11) gen_lane_lim: the kart itself is to stay within the lanes its remaining changes reach from the lane
+        it is in (the referee's count as changes happen), ``lane_guard_margin`` inside their outer boundaries, until
+        the straight ends. The aim may lie further out by as much as the kart cannot follow before then: pure
+        pursuit closes its lateral offset on the aim's with the time constant of its lookahead, so over the time t
+        left on the straight it covers 1 - exp(-t / tau) of the way (an aim clamped to the lane outright held the
+        kart in it into the curve: it turned in late, and in three of 100 races from a spread start on
+        complex-reversed ran into the kart beside it). None: the guard is off, the kart is on a curve (no limit
+        there), or every lane is within reach."""
         p = self.params
         assert self._context is not None
         if not p.lane_rule_guard or kart.lane_now <= 0 or not track.section_is_straight(kart.checkpoints_passed):
@@ -221,7 +226,20 @@ class LQNGTracker:
             return None
         highest = math.inf if leftmost == 1 else 0.5 * float(offsets[leftmost - 1] + offsets[leftmost - 2])
         lowest = -math.inf if rightmost == lanes else 0.5 * float(offsets[rightmost - 1] + offsets[rightmost])
-        return lowest + p.lane_guard_margin, highest - p.lane_guard_margin
+        highest, lowest = highest - p.lane_guard_margin, lowest + p.lane_guard_margin
+        end = kart.checkpoints_passed + 1
+        while track.section_is_straight(end) and end < kart.checkpoints_passed + track.n_checkpoints:
+            end += 1
+        left = (float(track.checkpoint_s[end % track.n_checkpoints]) - kart.progress) % track.length
+        speed = max(abs(kart.speed), 1.0)
+        tau = max(p.lookahead_time, p.min_lookahead / speed)
+        followed = max(-math.expm1(-left / speed / tau), 1e-6)  # the share of the way to the aim covered by the curve
+        here = kart.lateral
+        if here < highest:
+            highest = here + (highest - here) / followed
+        if here > lowest:
+            lowest = here + (lowest - here) / followed
+        return lowest, highest
 
     def _passing(self, track: Track, me: KartView, others: list[KartView], plan: Plan | None) -> bool:
         """Whether ``me`` is on a straight behind a kart within ``pass_distance`` that drives slower than the racing

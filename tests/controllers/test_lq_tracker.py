@@ -8,6 +8,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from controllers.base import Action, RaceContext
 from controllers.hierarchical import HierarchicalController
@@ -143,34 +144,47 @@ def test_a_pass_planned_on_a_straight_is_driven_in_its_lane() -> None:
 
 
 def test_with_its_lane_changes_spent_on_a_straight_it_steers_for_no_other_lane() -> None:
-    """mcts-lqng's lane-rule guard: on a straight with k of the rule's L changes left, the aim stays within the
-    lanes k changes reach from the lane the kart is in, 0.2 m inside their outer boundaries; on a curve (no limit
-    there), with every lane in reach, or with the guard off, it is free. The aim itself is clamped."""
+    """mcts-lqng's lane-rule guard: on a straight with k of the rule's L changes left, the kart is to stay within the
+    lanes k changes reach from the lane it is in, 0.2 m inside their outer boundaries, until the straight ends. Far
+    from its end the aim is held there; near it the aim may lie as far out as the kart cannot follow in the time
+    left (pure pursuit closes on the aim with its lookahead's time constant). On a curve (no limit there), with
+    every lane in reach, or with the guard off, it is free. The aim itself is clamped."""
     track = get_track("oval")
     limit = track.lane_change_limit
     straight = 11  # the oval's back straight runs from checkpoint 10 to 16
-    assert track.section_is_straight(straight) and not track.section_is_straight(8)
+    assert track.section_is_straight(straight) and not track.section_is_straight(16)
+    assert all(track.section_is_straight(c) for c in range(10, 16)) and not track.section_is_straight(8)
     offsets = track.lane_offsets(straight + 1)
     boundary_1_2, boundary_2_3, boundary_3_4 = (0.5 * float(offsets[i] + offsets[i + 1]) for i in range(3))
     margin = MCTS_TRACKING.lane_guard_margin
+    lane_2 = float(offsets[1])
 
-    def bounds(lane: int, changes: int, passed: int = straight, params: LQNGParams = MCTS_TRACKING):  # type: ignore[no-untyped-def]
-        me = replace(_on_oval(0, float(track.checkpoint_s[passed]) + 3.0, 1.25, passed), lane_now=lane)
+    def bounds(  # type: ignore[no-untyped-def]
+        lane: int, changes: int, passed: int = straight, params: LQNGParams = MCTS_TRACKING, to_go: float | None = None
+    ):
+        s = float(track.checkpoint_s[passed]) + 3.0 if to_go is None else float(track.checkpoint_s[16]) - to_go
+        me = replace(_on_oval(0, s, lane_2, passed), lane_now=lane, lane_changes_now=changes)
         tracker = LQNGTracker(params)
         tracker.reset(RaceContext(track, PAPER_KART, 0, 2, limit, 0))
-        return tracker._lane_rule_bounds(track, replace(me, lane_changes_now=changes))
+        return tracker._lane_rule_bounds(track, me)
 
-    assert bounds(2, limit) == (boundary_2_3 + margin, boundary_1_2 - margin)  # spent: its own lane only
-    assert bounds(2, limit + 1) == (boundary_2_3 + margin, boundary_1_2 - margin)
-    assert bounds(2, limit - 1) == (boundary_3_4 + margin, math.inf)  # one left: lanes 1 to 3
-    assert bounds(1, limit - 1) == (boundary_2_3 + margin, math.inf)
+    held = (pytest.approx(boundary_2_3 + margin, abs=0.01), pytest.approx(boundary_1_2 - margin, abs=0.01))
+    assert bounds(2, limit) == held  # spent, 47 m from the curve: its own lane only
+    assert bounds(2, limit + 1) == held
+    one_left = bounds(2, limit - 1)  # one change left: lanes 1 to 3
+    assert one_left is not None and one_left[0] == pytest.approx(boundary_3_4 + margin, abs=0.01)
+    assert one_left[1] == math.inf
     assert bounds(2, limit - 2) is None  # every lane in reach
     assert bounds(2, limit, passed=8) is None  # a curve
     assert bounds(2, limit, params=replace(MCTS_TRACKING, lane_rule_guard=False)) is None
+    near = bounds(2, limit, passed=15, to_go=2.0)  # 2 m (0.14 s) before the curve: it cannot follow far by then
+    assert near is not None and near[0] < boundary_3_4 and near[1] > boundary_1_2 + 1.0
+    halfway = bounds(2, limit, passed=15, to_go=5.0)
+    assert halfway is not None and near[0] < halfway[0] < boundary_2_3 + margin - 0.1
     tracker = LQNGTracker(MCTS_TRACKING)
     tracker.reset(RaceContext(track, PAPER_KART, 0, 2, limit, 0))
-    me = _on_oval(0, float(track.checkpoint_s[straight]) + 3.0, 1.25, straight)
+    me = _on_oval(0, float(track.checkpoint_s[straight]) + 3.0, lane_2, straight)
     far_right = Waypoint(straight + 1, 4, tuple(track.lane_point(straight + 1, 4)), 15.0, 0.0)  # type: ignore[arg-type]
     _, _, free = tracker._aim(track, me, far_right, far_right, 0.0)
-    _, _, held = tracker._aim(track, me, far_right, far_right, 0.0, (boundary_2_3 + margin, boundary_1_2 - margin))
-    assert free < boundary_2_3 and held == boundary_2_3 + margin
+    _, _, aim = tracker._aim(track, me, far_right, far_right, 0.0, (boundary_2_3 + margin, boundary_1_2 - margin))
+    assert free < boundary_2_3 and aim == boundary_2_3 + margin
