@@ -116,8 +116,8 @@ class LQNGParams:
 # every race against an equal kart ends as before (results/issue11/session17/README.md). A pass planned on a straight
 # (the next lane clear of the kart ahead by 1.5 m, within 10 m of it) is driven exactly: blended toward the line it
 # stayed in the other's wake, held back by station keeping (results/issue11/session18/README.md). With its lane changes
-# of a straight spent, it steers for no other lane before the curve: races from a spread start crossed into the
-# next curve's lane a few metres early, an illegal lane change (results/issue11/session19/README.md)
+# of a straight spent, it keeps within reach of its lanes until the curve: races from a spread start crossed into
+# the next curve's lane a few metres early, an illegal lane change (results/issue11/session19/README.md)
 MCTS_TRACKING = LQNGParams(
     speed_margin=3.0,
     traffic_lane_tolerance=1.25,
