@@ -79,6 +79,10 @@ class LQNGParams:
     # other's wake, held back by station keeping; 0: off
     pass_distance: float = 0.0
     pass_clearance: float = 1.5  # [m]
+    # a pass is also planned where the plan predicts the kart ahead in a lane ``pass_clearance`` sideways from the
+    # ego's at one of its next two waypoints (it is about to leave the ego's lane, as a line follower does ahead
+    # of a curve): blended toward the line, the ego followed it out of its lane and stayed in its wake
+    pass_on_prediction: bool = False
     pass_speed_margin: float = 0.3  # [m/s]
     # [1/s] the steering input changes at most this fast (lock to lock in 2/rate s); 0: unlimited. A full-lock
     # zig-zag between planned lanes is what traction control turns into braking
@@ -115,7 +119,8 @@ class LQNGParams:
 # followed a kart 15% slower home on complex; now it passes one 10% slower (8% slower in half the starts), and
 # every race against an equal kart ends as before (results/issue11/session17/README.md). A pass planned on a straight
 # (the next lane clear of the kart ahead by 1.5 m, within 10 m of it) is driven exactly: blended toward the line it
-# stayed in the other's wake, held back by station keeping (results/issue11/session18/README.md). With its lane changes
+# stayed in the other's wake, held back by station keeping (results/issue11/session18/README.md); so is one where the
+# kart ahead is predicted to leave the ego's lane (results/issue11/session20/README.md). With its lane changes
 # of a straight spent, it keeps within reach of its lanes until the curve: races from a spread start crossed into
 # the next curve's lane a few metres early, an illegal lane change (results/issue11/session19/README.md)
 MCTS_TRACKING = LQNGParams(
@@ -123,6 +128,7 @@ MCTS_TRACKING = LQNGParams(
     traffic_lane_tolerance=1.25,
     alongside_distance=4.0,
     pass_distance=10.0,
+    pass_on_prediction=True,
     follow_gain=1.0,
     follow_time=0.15,
     follow_band=1.0,
@@ -244,7 +250,8 @@ class LQNGTracker:
     def _passing(self, track: Track, me: KartView, others: list[KartView], plan: Plan | None) -> bool:
         """Whether ``me`` is on a straight behind a kart within ``pass_distance`` that drives slower than the racing
         line's speed there (by ``pass_speed_margin``), and its next planned lane clears that kart sideways by
-        ``pass_clearance``: a planned pass. (Behind a kart at the line's pace a lane apart is just a line: driven
+        ``pass_clearance`` (or, with ``pass_on_prediction``, the plan predicts that kart a lane that far from the
+        ego's at one of its next two waypoints): a planned pass. (Behind a kart at the line's pace a lane apart is just a line: driven
         exactly, it crossed lanes early into the next curve, an illegal lane change. The kart's own speed says
         nothing here: station keeping holds it to the other's.)"""
         p = self.params
@@ -259,9 +266,26 @@ class LQNGTracker:
         ]
         if not slower:
             return False
-        first, _ = self._upcoming(track, me, plan, me.index)
+        first, second = self._upcoming(track, me, plan, me.index)
         target = float(track.lane_offsets(first.checkpoint)[first.lane - 1])
-        return any(abs(target - k.lateral) >= p.pass_clearance for k in slower)
+        if any(abs(target - k.lateral) >= p.pass_clearance for k in slower):
+            return True
+        return p.pass_on_prediction and plan is not None and any(
+            self._predicted_apart(track, (first, second), plan.waypoints.get(k.index, ())) for k in slower
+        )
+
+    def _predicted_apart(self, track: Track, mine: tuple[Waypoint, ...], theirs: tuple[Waypoint, ...]) -> bool:
+        """Whether at one of the ego's waypoints ``mine`` the plan predicts the other kart (its waypoints
+        ``theirs``) in a lane at least ``pass_clearance`` sideways from the ego's."""
+        predicted = {w.checkpoint: w.lane for w in theirs}
+        for w in mine:
+            lane = predicted.get(w.checkpoint)
+            if lane is None:
+                continue
+            offsets = track.lane_offsets(w.checkpoint)
+            if abs(float(offsets[w.lane - 1]) - float(offsets[lane - 1])) >= self.params.pass_clearance:
+                return True
+        return False
 
     def _station_limit(self, kart: KartView, others: list[KartView], aim_offset: float) -> float:
         """Highest speed [m/s] that keeps station behind the nearest kart ahead in ``kart``'s path (inf: none):
