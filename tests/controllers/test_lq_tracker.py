@@ -143,6 +143,40 @@ def test_a_pass_planned_on_a_straight_is_driven_in_its_lane() -> None:
     assert MCTS_TRACKING.pass_clearance == 1.5
 
 
+def test_a_pass_where_the_kart_ahead_is_predicted_to_leave_the_lane_is_driven_in_it() -> None:
+    """mcts-lqng's tracker also drives its lanes exactly when the kart ahead is in the ego's next planned lane now
+    but the plan predicts it a lane (2.25-2.5 m) away at one of the ego's next two waypoints: a line follower moving
+    over ahead of a curve, which the ego, blending toward the line, used to follow into its wake. Not when the
+    prediction keeps it in the ego's lanes, when only a later waypoint differs, or with ``pass_on_prediction`` off."""
+    track = get_track("oval")
+    assert MCTS_TRACKING.pass_on_prediction and not LQNGParams().pass_on_prediction
+
+    def waypoints(checkpoint: int, lanes: tuple[int, ...]) -> tuple[Waypoint, ...]:
+        out = []
+        for k, lane in enumerate(lanes):
+            point = track.lane_point(checkpoint + k, lane)
+            out.append(Waypoint(checkpoint + k, lane, (float(point[0]), float(point[1])), 15.0, 0.0))
+        return tuple(out)
+
+    straight = 11  # the oval's back straight runs from checkpoint 10 to 16
+    s = float(track.checkpoint_s[straight]) + 2.0
+    me = _on_oval(0, s, 1.25, straight)
+    ahead = _on_oval(1, s + 6.0, 1.25, straight, speed=12.0)  # in lane 2, the ego's lane
+
+    def passing(theirs: tuple[int, ...], mine: tuple[int, ...] = (2, 2, 2), params: LQNGParams = MCTS_TRACKING) -> bool:
+        plan = Plan(0, straight, {0: waypoints(straight + 1, mine), 1: waypoints(straight + 1, theirs)}, 1, 1, 0.0)
+        tracker = LQNGTracker(params)
+        tracker.reset(RaceContext(track, PAPER_KART, 0, 2, track.lane_change_limit, 0))
+        return tracker._passing(track, me, [ahead], plan)
+
+    assert passing((2, 1, 1))  # it leaves for lane 1 at the ego's second waypoint
+    assert passing((3, 3, 3))  # ... or lane 3 at the first
+    assert not passing((2, 2, 2))  # it stays ahead in the ego's lane: following
+    assert not passing((2, 2, 1))  # it leaves only beyond the ego's next two waypoints
+    assert not passing((2, 1, 1), mine=(2, 1, 1))  # the ego follows it over
+    assert not passing((2, 1, 1), params=replace(MCTS_TRACKING, pass_on_prediction=False))
+
+
 def test_with_its_lane_changes_spent_on_a_straight_it_steers_for_no_other_lane() -> None:
     """mcts-lqng's lane-rule guard: on a straight with k of the rule's L changes left, the kart is to stay within the
     lanes k changes reach from the lane it is in, 0.2 m inside their outer boundaries, until the straight ends. Far
