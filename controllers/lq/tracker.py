@@ -251,9 +251,9 @@ class LQNGTracker:
         """Whether ``me`` is on a straight behind a kart within ``pass_distance`` that drives slower than the racing
         line's speed there (by ``pass_speed_margin``), and its next planned lane clears that kart sideways by
         ``pass_clearance`` (or, with ``pass_on_prediction``, the plan predicts that kart a lane that far from the
-        ego's at one of its next two waypoints): a planned pass. (Behind a kart at the line's pace a lane apart is just a line: driven
-        exactly, it crossed lanes early into the next curve, an illegal lane change. The kart's own speed says
-        nothing here: station keeping holds it to the other's.)"""
+        ego's at one of its next two waypoints): a planned pass. (Behind a kart at the line's pace a lane apart is
+        just a line: driven exactly, it crossed lanes early into the next curve, an illegal lane change. The kart's
+        own speed says nothing here: station keeping holds it to the other's.)"""
         p = self.params
         assert self._line is not None
         if not track.section_is_straight(me.checkpoints_passed):
