@@ -270,8 +270,10 @@ class LQNGTracker:
         target = float(track.lane_offsets(first.checkpoint)[first.lane - 1])
         if any(abs(target - k.lateral) >= p.pass_clearance for k in slower):
             return True
-        return p.pass_on_prediction and plan is not None and any(
-            self._predicted_apart(track, (first, second), plan.waypoints.get(k.index, ())) for k in slower
+        return (
+            p.pass_on_prediction
+            and plan is not None
+            and any(self._predicted_apart(track, (first, second), plan.waypoints.get(k.index, ())) for k in slower)
         )
 
     def _predicted_apart(self, track: Track, mine: tuple[Waypoint, ...], theirs: tuple[Waypoint, ...]) -> bool:
