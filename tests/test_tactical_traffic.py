@@ -108,12 +108,16 @@ def test_a_faster_tactical_kart_passes_a_slower_one_by_the_rules(speed_scale: fl
     assert tactical.collisions_at_fault == 0 and tactical.illegal_lane_changes == 0
 
 
-@pytest.mark.parametrize("seed", [2, 6])
+@pytest.mark.parametrize("seed", [2, 4, 14])
 def test_a_pass_under_way_is_finished_against_a_kart_7_percent_slower(seed: int) -> None:
     """The same start against a kart at 93% of its speed targets, 2 laps: mcts-lqng must get by, win, and break
     no rule. It did not until session 18 (0.30-0.37 s behind at the flag): it gave up a pass as soon as the next
     plan preferred the line (now ``hold_gain_s`` keeps it), and it drove its passing lane blended toward the
-    line, in the other kart's wake, held back by station keeping (now ``pass_distance`` drives it exactly)."""
+    line, in the other kart's wake, held back by station keeping (now ``pass_distance`` drives it exactly). Seeds 4
+    and 14 failed until session 20 too (0.48 s behind): the plan kept a pass where the kart ahead was predicted to
+    leave the ego's lane, but the tracker, seeing both in one lane, blended it back into the wake (now
+    ``pass_on_prediction`` drives it). Of 11 such starts, 10 pass now, 6 with session 19's tracker, none with
+    session 17's (results/issue11/session20/README.md)."""
     spec = RaceSpec(track="complex", controllers=("mcts-lqng", "fixed-lqng"), laps=2, seed=seed, start_lanes=(2, 3))
     drivers = [make_controller("mcts-lqng"), make_controller("fixed-lqng", speed_scale=0.93)]
     tactical, slow = run_race(spec, drivers=drivers).result.karts
