@@ -8,6 +8,12 @@ per race: ``Experiment N``, then per agent ``NAME Field: value`` lines (``Total 
 :func:`arena.records.winner_index`. For MCTS-LQNG vs Fixed-LQNG on the complex track the paper used
 ``MCTS_LQR_vs_Fixed_LQR_Complex3.txt`` (a re-run); :data:`PREFERRED_RUNS` says so and the reader takes it.
 
+Start lanes are not logged; they follow from the original's experiment grid (``RacingEnvController.ResetGame``):
+race ``Experiment N`` places the karts in the order ``allOrderings[N % n!]`` (the permutations of its ``Agents``
+array, in lexicographic order) into lanes 2, 3, 2, 3 at checkpoint 0. The log lists the karts in ``Agents`` order
+(its ``TelemetryViewer`` iterates that array), so with two karts the first one listed starts in lane 2 in even
+races and in lane 3 in odd ones (:func:`original_start_lanes`).
+
 The original counts illegal lane changes by sampling lanes at checkpoints (our ``checkpoint`` rule) and logs
 collisions at fault as ``Collisions``; it logs no passes.
 """
@@ -17,6 +23,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
+from itertools import permutations
 from pathlib import Path
 
 from arena.records import CHECKPOINT, KartFigures, RaceFigures
@@ -33,6 +40,7 @@ TRACK_NAMES: Mapping[str, str] = {"Oval": "oval", "Complex": "complex"}
 # (file stem without the run number, run) the paper took instead of the default run 2
 PREFERRED_RUNS: Mapping[str, int] = {"MCTS_LQR_vs_Fixed_LQR_Complex": 3}
 DEFAULT_RUN = 2
+GRID_LANES = (2, 3, 2, 3)  # the original's ``expLaneChoices``: the lane of the first, second, ... kart placed
 
 _FILE = re.compile(r"^(?P<a>[A-Za-z0-9_]+)_vs_(?P<b>[A-Za-z0-9_]+)_(?P<track>Oval|Complex)(?P<run>\d+)\.txt$")
 _EXPERIMENT = re.compile(r"^Experiment\s+(\d+)\s*$")
@@ -80,6 +88,17 @@ def log_files(folder: str | Path) -> list[LogFile]:
     if not found:
         raise FileNotFoundError(f"no race logs (A_vs_B_TrackN.txt) in {folder}")
     return sorted(found.values(), key=lambda log: (list(TRACK_NAMES.values()).index(log.track), log.key))
+
+
+def original_start_lanes(experiment: int, karts: int) -> tuple[int, ...]:
+    """The start lane of each kart (in log order) in race ``experiment`` of the original's experiment grid."""
+    if not 1 <= karts <= len(GRID_LANES):
+        raise ValueError(f"the original's grid has {len(GRID_LANES)} places, not {karts}")
+    orderings = list(permutations(range(karts)))
+    lanes = [0] * karts
+    for place, kart in enumerate(orderings[experiment % len(orderings)]):
+        lanes[kart] = GRID_LANES[place]
+    return tuple(lanes)
 
 
 def _blocks(path: Path) -> Iterator[tuple[int, int, list[tuple[int, str]]]]:
@@ -137,7 +156,15 @@ def read_log(log: LogFile) -> list[RaceFigures]:
         karts = tuple(_kart(log.path, line, agent, fields) for agent, fields in per_agent.items())
         if sorted(k.agent for k in karts) != sorted(log.agents):
             raise LogFormatError(f"{log.path.name}:{line}: agents {[k.agent for k in karts]}, expected {log.agents}")
-        races.append(RaceFigures(track=log.track, karts=karts, index=experiment, extra={"file": log.path.name}))
+        races.append(
+            RaceFigures(
+                track=log.track,
+                karts=karts,
+                index=experiment,
+                start_lanes=original_start_lanes(experiment, len(karts)),
+                extra={"file": log.path.name},
+            )
+        )
     return races
 
 

@@ -17,7 +17,7 @@ from types import ModuleType
 from typing import TYPE_CHECKING
 
 from arena.records import RaceFigures
-from arena.stats import COMBINED, SAFETY_METRICS, MeanStd, TournamentStats, TrackStats
+from arena.stats import ALPHA, COMBINED, SAFETY_METRICS, MeanStd, TournamentStats, TrackStats
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -80,6 +80,29 @@ def plan_rows(table: TrackStats) -> list[list[str]]:
     return rows
 
 
+def start_lane_rows(table: TrackStats) -> list[list[str]]:
+    """Wins by start lane (races with known start lanes): per pair (row agent first), the first agent's wins–losses
+    from each of its start lanes and Fisher's exact test of whether they depend on the lane (``*``: p < 0.05); a
+    last row with the wins–losses of whichever kart started in each lane. Only the header when no race has
+    known start lanes."""
+    lanes = list(table.start_lanes.by_lane)
+    rows = [["pair", *(f"from lane {lane}: wins–losses" for lane in lanes), "Fisher p"]]
+    for (a, b), split in table.start_lanes.pairs.items():
+        if table.agents.index(a) > table.agents.index(b):
+            continue
+        cells = [f"{a} vs {b}"]
+        for lane in lanes:
+            record = split.by_lane.get(lane)
+            cells.append("-" if record is None else f"{record.wins}–{record.losses}")
+        p = split.fisher_p
+        cells.append("-" if p is None else f"{p:.2g}{'*' if p < ALPHA else ''}")
+        rows.append(cells)
+    if lanes:
+        records = table.start_lanes.by_lane.values()
+        rows.append(["any kart", *(f"{r.wins}–{r.losses}" for r in records), "-"])
+    return rows
+
+
 def _markdown(rows: Sequence[Sequence[str]]) -> str:
     lines = ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
     lines += ["| " + " | ".join(row) + " |" for row in rows[1:]]
@@ -95,9 +118,13 @@ def markdown(stats: TournamentStats, title: str) -> str:
         parts += [_markdown(win_rows(table)), "", "### Safety per race: mean and std. dev. over all races", ""]
         parts += [_markdown(safety_rows(table)), "", "### Plan following (finished races) and passes", ""]
         parts += [_markdown(plan_rows(table)), ""]
+        if table.start_lanes.races:
+            parts += ["### Wins by start lane (row pair's first agent; Fisher's exact test of the lane's effect)", ""]
+            parts += [_markdown(start_lane_rows(table)), ""]
     parts += [
         "`*`: significant at p = 0.05 (wins: two-sided binomial test of the pair's decided races; per-race figures: "
-        "two-sided pooled t-tests, marked when significant against every other agent).",
+        "two-sided pooled t-tests, marked when significant against every other agent; start lanes: Fisher's exact "
+        "test, two-sided).",
         "",
     ]
     return "\n".join(parts)
@@ -120,6 +147,7 @@ def write_report(stats: TournamentStats, races: Sequence[RaceFigures], out: str 
         written.append(_write_csv(folder / f"wins_{track}.csv", win_rows(table)))
         written.append(_write_csv(folder / f"safety_{track}.csv", safety_rows(table)))
         written.append(_write_csv(folder / f"plan_{track}.csv", plan_rows(table)))
+        written.append(_write_csv(folder / f"start_lanes_{track}.csv", start_lane_rows(table)))
     written += plot_report(stats, races, folder)
     return written
 

@@ -18,6 +18,11 @@ Computed as the paper does, checked against its appendix tables on the original'
   Student's); an agent's figure is *marked* when it differs significantly from every other agent's (the paper's
   "pair-wise statistical significance with all other agent types"). Pooled and Welch's tests give the same 45
   safety marks on the original's logs, all equal to the paper's; pooled is scipy's default and is kept.
+* **Start lanes** (:func:`start_lane_table`), over the races whose start lanes are known: per start lane, the
+  races a kart started from it and the races that kart won; per pair, each agent's wins and losses from each of
+  its start lanes, with Fisher's exact test (``scipy.stats.fisher_exact``, two-sided) of whether its share of the
+  pair's decided races depends on its lane (two lanes only). On the original's complex track the kart starting in
+  lane 2 won 44 of MCTS-LQNG's 50 races against Fixed-LQNG (p = 4e-8): the grid decided most of them.
 * **Leaderboard** across tournaments (:func:`leaderboard`): per agent its races, wins, win rate, races finished
   and safety score, over every race of the tournaments given.
 """
@@ -127,6 +132,60 @@ class PairTest:
 
 
 @dataclass(frozen=True)
+class LaneRecord:
+    """Races from one start lane: how many, how many the kart from that lane won and lost (the rest nobody won)."""
+
+    races: int
+    wins: int
+    losses: int
+
+    def to_json(self) -> dict[str, int]:
+        """``{"races", "wins", "losses"}``."""
+        return {"races": self.races, "wins": self.wins, "losses": self.losses}
+
+
+@dataclass(frozen=True)
+class PairLanes:
+    """Agent ``a``'s record against ``b`` by ``a``'s start lane, and Fisher's exact test of whether its share of
+    the decided races depends on that lane (``None`` unless it started from exactly two lanes)."""
+
+    a: str
+    b: str
+    by_lane: Mapping[int, LaneRecord]
+    fisher_p: float | None
+
+    def to_json(self) -> dict[str, Any]:
+        """``{"by_lane": {LANE: {"races", "wins", "losses"}}, "fisher_p": p | None, "significant": bool}``."""
+        return {
+            "by_lane": {str(lane): record.to_json() for lane, record in self.by_lane.items()},
+            "fisher_p": self.fisher_p,
+            "significant": self.fisher_p is not None and self.fisher_p < ALPHA,
+        }
+
+
+@dataclass(frozen=True)
+class StartLanes:
+    """How races went by start lane (races with known start lanes only): per lane, the races a kart started from
+    it and that kart's wins and losses; per ordered pair of agents that met in two-kart races, the first one's
+    record by its start lane."""
+
+    races: int  # races with known start lanes
+    by_lane: Mapping[int, LaneRecord]
+    pairs: Mapping[tuple[str, str], PairLanes]
+
+    def to_json(self, agents: Sequence[str]) -> dict[str, Any]:
+        """``{"races": n, "by_lane": {LANE: {...}}, "pairs": {A: {B: {...}}}}``."""
+        pairs: dict[str, dict[str, Any]] = {a: {} for a in agents}
+        for (a, b), split in self.pairs.items():
+            pairs[a][b] = split.to_json()
+        return {
+            "races": self.races,
+            "by_lane": {str(lane): record.to_json() for lane, record in self.by_lane.items()},
+            "pairs": {a: row for a, row in pairs.items() if row},
+        }
+
+
+@dataclass(frozen=True)
 class TrackStats:
     """The statistics of one track (or of all tracks together)."""
 
@@ -135,6 +194,7 @@ class TrackStats:
     agent_stats: Mapping[str, AgentStats]
     win_tests: Mapping[tuple[str, str], PairTest]  # (a, b) for a before b in ``agents``
     metric_tests: Mapping[str, Mapping[tuple[str, str], PairTest]]  # metric -> (a, b) -> t-test
+    start_lanes: StartLanes
 
     def win_test(self, a: str, b: str) -> PairTest | None:
         """The binomial test of the pair (either order); ``None`` when they never met."""
@@ -164,6 +224,7 @@ class TrackStats:
         return {
             "wins": {a: dict(self.wins[a]) for a in self.agents},
             "safety": {a: self.agent_stats[a].to_json() for a in self.agents},
+            "start_lanes": self.start_lanes.to_json(self.agents),
             "tests": {
                 "alpha": ALPHA,
                 "wins": win_tests,
@@ -277,6 +338,40 @@ def t_test(a: str, b: str, values_a: Sequence[float], values_b: Sequence[float])
     return PairTest(a, b, float(result.statistic), float(result.pvalue))
 
 
+def _lane_record(outcomes: Sequence[bool | None]) -> LaneRecord:
+    """``outcomes``: per race True (won), False (lost), None (nobody won)."""
+    return LaneRecord(len(outcomes), sum(o is True for o in outcomes), sum(o is False for o in outcomes))
+
+
+def start_lane_table(races: Sequence[RaceFigures], agents: Sequence[str]) -> StartLanes:
+    """Wins and losses by start lane over the races whose start lanes are known (see :class:`StartLanes`)."""
+    known = [race for race in races if race.start_lanes is not None]
+    per_lane: dict[int, list[bool | None]] = {}
+    per_pair: dict[tuple[str, str], dict[int, list[bool | None]]] = {}
+    for race in known:
+        assert race.start_lanes is not None
+        index = winner_index(race.karts)
+        for k, lane in enumerate(race.start_lanes):
+            per_lane.setdefault(lane, []).append(None if index is None else index == k)
+        if len(race.karts) != 2 or race.agents[0] == race.agents[1]:
+            continue
+        for k in (0, 1):
+            outcome = None if index is None else index == k
+            pair = (race.agents[k], race.agents[1 - k])
+            per_pair.setdefault(pair, {}).setdefault(race.start_lanes[k], []).append(outcome)
+    pairs = {}
+    for pair, lanes in per_pair.items():
+        by_lane = {lane: _lane_record(lanes[lane]) for lane in sorted(lanes)}
+        p = None
+        if len(by_lane) == 2:
+            table = [[r.wins, r.losses] for r in by_lane.values()]
+            p = float(scipy_stats.fisher_exact(table).pvalue)
+        pairs[pair] = PairLanes(pair[0], pair[1], by_lane, p)
+    by_lane = {lane: _lane_record(per_lane[lane]) for lane in sorted(per_lane)}
+    ordered = dict(sorted(pairs.items(), key=lambda item: (agents.index(item[0][0]), agents.index(item[0][1]))))
+    return StartLanes(len(known), by_lane, ordered)
+
+
 def track_stats(races: Sequence[RaceFigures]) -> TrackStats:
     """The statistics of ``races`` (one track, or several taken together)."""
     agents = agent_order(name for race in races for name in race.agents)
@@ -289,7 +384,14 @@ def track_stats(races: Sequence[RaceFigures]) -> TrackStats:
         values = {a: metric_values(races, a, metric) for a in agents}
         tests = {(a, b): t_test(a, b, values[a], values[b]) for a, b in combinations(agents, 2)}
         metric_tests[metric] = {pair: test for pair, test in tests.items() if test is not None}
-    return TrackStats(agents, wins, {a: agent_stats(races, a) for a in agents}, win_tests, metric_tests)
+    return TrackStats(
+        agents,
+        wins,
+        {a: agent_stats(races, a) for a in agents},
+        win_tests,
+        metric_tests,
+        start_lane_table(races, agents),
+    )
 
 
 def tournament_stats(races: Sequence[RaceFigures]) -> TournamentStats:

@@ -145,8 +145,9 @@ def _stats_of(store: TournamentDatabase, tournament_id: str) -> TournamentStats:
 
 
 def _print_wins(stats: TournamentStats) -> None:
-    """Each track's win table and a compact safety table: mean (std) per metric, races finished of all."""
-    from arena.report import safety_rows, win_rows
+    """Each track's win table, a compact safety table (mean (std) per metric, races finished of all) and, where
+    start lanes are known, the wins by start lane."""
+    from arena.report import safety_rows, start_lane_rows, win_rows
     from arena.stats import COMBINED
 
     for track, table in stats.tracks.items():
@@ -159,8 +160,11 @@ def _print_wins(stats: TournamentStats) -> None:
         ]
         rule = table.agent_stats[table.agents[0]].illegal_lane_changes.rule
         header = ["agent", "collisions\nat fault", f"illegal lane\nchanges ({rule})", "safety\nscore", "finished"]
-        for title, rows in ((f"wins ({track})", wins), (f"safety ({track}): mean (std)", [header, *safety])):
-            columns = [column.replace("vs ", "vs\n") for column in rows[0]]
+        tables = [(f"wins ({track})", wins), (f"safety ({track}): mean (std)", [header, *safety])]
+        if table.start_lanes.races:
+            tables.append((f"wins by start lane ({track})", start_lane_rows(table)))
+        for title, rows in tables:
+            columns = [column.replace("vs ", "vs\n").replace(": ", ":\n") for column in rows[0]]
             shown = make_table(title, columns, keys=columns[:1], numeric=columns[1:])
             for row in rows[1:]:
                 add_row(shown, *(str(cell) for cell in row))

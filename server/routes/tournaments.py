@@ -17,7 +17,7 @@ from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from arena.records import RaceFigures
-from arena.report import METRIC_TITLES, plan_rows, plot_stems, safety_rows, win_rows
+from arena.report import METRIC_TITLES, plan_rows, plot_stems, safety_rows, start_lane_rows, win_rows
 from arena.stats import COMBINED, Standing, leaderboard, tournament_stats
 from arena.tournament import TournamentSpec
 from controllers.race import MAX_START_SPREAD
@@ -125,6 +125,10 @@ class TrackTablesOut(BaseModel):
     wins: list[list[str]] = Field(description="row agent's wins against each column agent")
     safety: list[list[str]]
     plan: list[list[str]]
+    start_lanes: list[list[str]] = Field(
+        description="per pair, the row pair's first agent's wins–losses from each start lane and Fisher's exact test"
+        " of the lane's effect; a last row for whichever kart started in each lane"
+    )
 
 
 class PlotOut(BaseModel):
@@ -299,7 +303,12 @@ async def get_tournament(tournament_id: str, tournaments: Tournaments, stats: bo
 def _tables(stored: StoredTournament, figures: list[RaceFigures]) -> TournamentTablesOut:
     stats = tournament_stats(figures)
     tracks = {
-        track: TrackTablesOut(wins=win_rows(table), safety=safety_rows(table), plan=plan_rows(table))
+        track: TrackTablesOut(
+            wins=win_rows(table),
+            safety=safety_rows(table),
+            plan=plan_rows(table),
+            start_lanes=start_lane_rows(table),
+        )
         for track, table in stats.tracks.items()
     }
     titles = []
@@ -314,7 +323,8 @@ def _tables(stored: StoredTournament, figures: list[RaceFigures]) -> TournamentT
     ]
     note = (
         "*: significant at p = 0.05 (wins: two-sided binomial test of the pair's decided races; per-race figures: "
-        "two-sided pooled t-tests, marked when significant against every other agent). Safety: mean and std. dev. "
+        "two-sided pooled t-tests, marked when significant against every other agent; start lanes: Fisher's exact "
+        "test, two-sided). Safety: mean and std. dev. "
         f"over all races; {METRIC_TITLES['illegal_lane_changes']} under the rule shown."
     )
     return TournamentTablesOut(

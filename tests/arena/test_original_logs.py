@@ -21,6 +21,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from scipy import stats as scipy_stats
 
 from arena.original_logs import log_files, read_original_logs
 from arena.stats import COMBINED, TournamentStats, tournament_stats
@@ -225,7 +226,12 @@ def test_the_stats_json_has_the_documented_shape(stats: TournamentStats) -> None
     data = stats.to_json()
     assert set(data) == {"tracks"} and set(data["tracks"]) == {"oval", "complex", COMBINED}
     for table in data["tracks"].values():
-        assert set(table) == {"wins", "safety", "tests"}
+        assert set(table) == {"wins", "safety", "start_lanes", "tests"}
+        assert table["start_lanes"]["races"] == 500 * (2 if table is data["tracks"][COMBINED] else 1)
+        assert set(table["start_lanes"]["by_lane"]) == {"2", "3"}
+        split = table["start_lanes"]["pairs"]["mcts-lqng"]["fixed-lqng"]
+        assert set(split) == {"by_lane", "fisher_p", "significant"}
+        assert set(split["by_lane"]["2"]) == {"races", "wins", "losses"}
         assert set(table["wins"]) == set(AGENTS) == set(table["safety"])
         entry = table["safety"]["mcts-rl"]
         assert set(entry["collisions_at_fault"]) == {"mean", "std"}
@@ -233,3 +239,20 @@ def test_the_stats_json_has_the_documented_shape(stats: TournamentStats) -> None
             entry["illegal_lane_changes"]["rule"] == "checkpoint" and entry["illegal_lane_changes"]["per_step"] is None
         )
         assert {"races", "finished", "safety_score", "delta_r", "delta_v", "passes"} <= set(entry)
+
+
+def test_the_start_lane_decided_mcts_lqng_against_fixed_lqng_on_complex(stats: TournamentStats) -> None:
+    """The paper's 29-21 on complex was 24-1 from lane 2 and 5-20 from lane 3 (the grid of
+    ``arena.original_logs.original_start_lanes``): the kart in lane 2 won 44 of the 50. Worked out by hand from
+    ``MCTS_LQR_vs_Fixed_LQR_Complex3.txt``, even experiments (MCTS-LQR, listed first, in lane 2) against odd ones."""
+    table = stats.tracks["complex"]
+    split = table.start_lanes.pairs[("mcts-lqng", "fixed-lqng")]
+    assert {lane: (r.races, r.wins, r.losses) for lane, r in split.by_lane.items()} == {2: (25, 24, 1), 3: (25, 5, 20)}
+    assert split.fisher_p == pytest.approx(scipy_stats.fisher_exact([[24, 1], [5, 20]]).pvalue)
+    assert split.fisher_p is not None and split.fisher_p < 1e-7
+    other_side = table.start_lanes.pairs[("fixed-lqng", "mcts-lqng")]
+    assert {lane: (r.wins, r.losses) for lane, r in other_side.by_lane.items()} == {2: (20, 5), 3: (1, 24)}
+    assert sum(table.wins["mcts-lqng"].values()) >= 29 and table.wins["mcts-lqng"]["fixed-lqng"] == 29
+    # on the oval the same pair is closer to even: 16-9 from lane 2, 8-17 from lane 3
+    oval = stats.tracks["oval"].start_lanes.pairs[("mcts-lqng", "fixed-lqng")]
+    assert {lane: (r.wins, r.losses) for lane, r in oval.by_lane.items()} == {2: (16, 9), 3: (8, 17)}

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from scipy import stats as scipy_stats
 
+from arena.original_logs import original_start_lanes
 from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures, winner_index
-from arena.report import plot_stem, plot_stems
+from arena.report import plot_stem, plot_stems, start_lane_rows
 from arena.stats import COMBINED, MeanStd, binomial_win_test, leaderboard, t_test, tournament_stats
 
 
@@ -35,8 +36,8 @@ def kart(
     )
 
 
-def race(track: str, *karts: KartFigures) -> RaceFigures:
-    return RaceFigures(track=track, karts=karts)
+def race(track: str, *karts: KartFigures, lanes: tuple[int, ...] | None = None) -> RaceFigures:
+    return RaceFigures(track=track, karts=karts, start_lanes=lanes)
 
 
 def test_only_a_finisher_can_win_and_the_faster_finisher_wins() -> None:
@@ -148,3 +149,56 @@ def test_plot_file_names_are_safe_for_any_track_name() -> None:
     assert plot_stem("safety", "tracks/my track.json") == "safety_tracks_my_track_json"
     stats = tournament_stats([race("oval", kart("a", 80.0), kart("b", None))])
     assert plot_stems(stats) == ["wins_oval", "safety_oval", "wins_combined", "safety_combined", "finish_times"]
+
+
+def test_wins_by_start_lane_count_each_lane_and_pair_and_test_the_lanes_effect_with_fishers_exact_test() -> None:
+    races = [
+        race("oval", kart("a", 80.0), kart("b", 81.0), lanes=(2, 3)),  # a from 2 wins
+        race("oval", kart("a", 80.0), kart("b", 81.0), lanes=(2, 3)),  # a from 2 wins
+        race("oval", kart("b", 80.0), kart("a", 81.0), lanes=(2, 3)),  # b from 2 wins: a from 3 loses
+        race("oval", kart("a", 79.0), kart("b", 80.0), lanes=(3, 2)),  # a from 3 wins
+        race("oval", kart("a", None), kart("b", None), lanes=(3, 2)),  # nobody won: counted, neither side
+        race("oval", kart("a", 70.0), kart("b", 90.0)),  # start lanes unknown: left out
+        race("oval", kart("a", 80.0), kart("a", 81.0), lanes=(2, 3)),  # self-play: per lane only
+    ]
+    table = tournament_stats(races).tracks["oval"]
+    lanes = table.start_lanes
+    assert lanes.races == 6
+    as_tuples = {lane: (r.races, r.wins, r.losses) for lane, r in lanes.by_lane.items()}
+    assert as_tuples == {2: (6, 4, 1), 3: (6, 1, 4)}
+    a_vs_b = lanes.pairs[("a", "b")]
+    assert {lane: (r.races, r.wins, r.losses) for lane, r in a_vs_b.by_lane.items()} == {2: (2, 2, 0), 3: (3, 1, 1)}
+    assert a_vs_b.fisher_p == pytest.approx(scipy_stats.fisher_exact([[2, 0], [1, 1]]).pvalue)
+    b_vs_a = lanes.pairs[("b", "a")]
+    assert {lane: (r.races, r.wins, r.losses) for lane, r in b_vs_a.by_lane.items()} == {2: (3, 1, 1), 3: (2, 0, 2)}
+    assert list(lanes.pairs) == [("a", "b"), ("b", "a")]
+    data = table.to_json()["start_lanes"]
+    assert data["pairs"]["a"]["b"] == {
+        "by_lane": {"2": {"races": 2, "wins": 2, "losses": 0}, "3": {"races": 3, "wins": 1, "losses": 1}},
+        "fisher_p": a_vs_b.fisher_p,
+        "significant": False,
+    }
+    rows = start_lane_rows(table)
+    assert rows[1:] == [["a vs b", "2–0", "1–1", "1"], ["any kart", "4–1", "1–4", "-"]]
+
+
+def test_a_lane_effect_is_marked_significant_and_one_lane_has_no_test() -> None:
+    decided = [race("oval", kart("a", 80.0), kart("b", 81.0), lanes=(2, 3)) for _ in range(6)]
+    decided += [race("oval", kart("a", 82.0), kart("b", 81.0), lanes=(3, 2)) for _ in range(6)]
+    split = tournament_stats(decided).tracks["oval"].start_lanes.pairs[("a", "b")]
+    assert split.fisher_p == pytest.approx(scipy_stats.fisher_exact([[6, 0], [0, 6]]).pvalue) and split.fisher_p < 0.05
+    assert start_lane_rows(tournament_stats(decided).tracks["oval"])[1][-1].endswith("*")
+    one_lane = tournament_stats(decided[:6]).tracks["oval"].start_lanes.pairs[("a", "b")]
+    assert one_lane.fisher_p is None and list(one_lane.by_lane) == [2]
+    assert tournament_stats([race("oval", kart("a", 1.0), kart("b", 2.0))]).tracks["oval"].start_lanes.races == 0
+
+
+def test_the_originals_grid_puts_the_first_listed_kart_in_lane_2_in_even_races() -> None:
+    assert [original_start_lanes(n, 2) for n in range(4)] == [(2, 3), (3, 2), (2, 3), (3, 2)]
+    # three karts: the permutations of (0, 1, 2) in lexicographic order place karts into lanes 2, 3, 2
+    assert original_start_lanes(0, 3) == (2, 3, 2)
+    assert original_start_lanes(1, 3) == (2, 2, 3)  # order (0, 2, 1)
+    assert original_start_lanes(2, 3) == (3, 2, 2)  # order (1, 0, 2)
+    assert original_start_lanes(6, 3) == original_start_lanes(0, 3)
+    with pytest.raises(ValueError, match="4 places"):
+        original_start_lanes(0, 5)

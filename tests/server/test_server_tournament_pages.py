@@ -147,6 +147,12 @@ def test_the_tables_are_laid_out_like_the_papers(client: httpx.Client) -> None:
     ]
     assert oval["safety"][0][:3] == ["agent", "avg. collisions-at-fault", "std. dev. collisions-at-fault"]
     assert oval["safety"][2][0] == "lane-follower" and oval["safety"][2][-2:] == ["2", "2"]  # finished, races
+    # race 0: fixed-lqng from lane 2 won; race 1: lane-follower from lane 2 won (Fisher's p of [[1, 0], [0, 1]])
+    assert oval["start_lanes"] == [
+        ["pair", "from lane 2: wins–losses", "from lane 3: wins–losses", "Fisher p"],
+        ["fixed-lqng vs lane-follower", "1–0", "0–1", "1"],
+        ["any kart", "2–0", "0–2", "-"],
+    ]
     names = [p["name"] for p in tables["plots"]]
     assert names == ["wins_oval", "safety_oval", "wins_combined", "safety_combined", "finish_times"]
     assert all(p["url"].startswith(f"/api/tournaments/t1/plots/{p['name']}.png") for p in tables["plots"])

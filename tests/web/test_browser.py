@@ -228,6 +228,11 @@ def _check_the_results(page: Page, base: str) -> None:
         cells = wins.locator(f'tr[data-agent="{agent}"] td').all_inner_texts()
         assert cells[1 - column] == "-" and cells[column].rstrip("*") == str(oval[agent][other])
     assert page.locator('table.safety[data-track="oval"] tr[data-agent="lane-follower"]').count() == 1
+    # wins by start lane: the pair's row as the API's counts (races 0 and 1 start fixed-lqng in lanes 2 and 3)
+    split = stats["tracks"]["oval"]["start_lanes"]["pairs"]["fixed-lqng"]["lane-follower"]["by_lane"]
+    lanes = page.locator('table.start-lanes[data-track="oval"] tr[data-agent="fixed-lqng vs lane-follower"] td')
+    expected = [f"{split[lane]['wins']}–{split[lane]['losses']}" for lane in ("2", "3")]
+    assert lanes.all_inner_texts()[:2] == expected
     assert page.locator('table[data-track="combined"]').count() == 0  # one track: no separate combined table
 
     heatmap = page.locator('figure[data-plot="wins_oval"] img')

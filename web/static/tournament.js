@@ -105,7 +105,9 @@ function renderResults(report) {
       el("h3", {}, track === "combined" ? "All tracks" : `Track ${track}`),
       el("h4", {}, "Head-to-head wins, row agent against column agent"), table(tables.wins, "wins", track),
       el("h4", {}, "Safety per race (mean and std. dev. over all races)"), table(tables.safety, "safety", track),
-      el("h4", {}, "Plan following (finished races) and passes"), table(tables.plan, "plan", track));
+      el("h4", {}, "Plan following (finished races) and passes"), table(tables.plan, "plan", track),
+      el("h4", {}, "Wins by start lane (the pair's first agent; Fisher's exact test of the lane's effect)"),
+      table(tables.start_lanes, "start-lanes", track));
   });
   document.getElementById("tables").replaceChildren(...sections);
   document.getElementById("tables-note").textContent = report.note;
