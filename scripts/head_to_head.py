@@ -75,6 +75,8 @@ def main(
     labels = names if names[0] != names[1] else tuple(f"{name}#{k}" for k, name in enumerate(names))
     wins = [0, 0]
     finished = [0, 0]
+    # per kart: its start lane -> [races from it, wins from it]
+    by_lane: list[dict[int, list[int]]] = [{}, {}]
     per_kart: list[dict[str, list[float]]] = [
         {
             "faults": [],
@@ -101,6 +103,10 @@ def main(
                 shortest[k] = min(shortest[k], run.shortest[k])
             if result.winner is not None:
                 wins[result.winner] += 1
+            for k, lane in enumerate(run.lanes):
+                record = by_lane[k].setdefault(lane, [0, 0])
+                record[0] += 1
+                record[1] += result.winner == k
             for k, kart in enumerate(result.karts):
                 stats = per_kart[k]
                 finished[k] += kart.finished
@@ -135,6 +141,10 @@ def main(
         "start_spread": start_spread,
         "wins": dict(zip(labels, wins, strict=True)),
         "completion": dict(zip(labels, [f / races for f in finished], strict=True)),
+        # each kart's races and wins by its start lane: {label: {lane: [races, wins]}}
+        "by_start_lane": {
+            label: {str(lane): by_lane[k][lane] for lane in sorted(by_lane[k])} for k, label in enumerate(labels)
+        },
     }
     for k, name in enumerate(labels):
         stats = per_kart[k]
