@@ -88,7 +88,8 @@ class LQNGParams:
     # zig-zag between planned lanes is what traction control turns into braking
     steer_rate: float = 0.0
     # keeping station behind a kart ahead (centres within ``follow_band`` laterally): at most its speed plus
-    # ``follow_gain`` times the gap beyond ``follow_distance`` + ``follow_time`` * speed; 0 gain: off
+    # ``follow_gain`` times the gap beyond ``follow_distance`` + ``follow_time`` * speed (or Gipps' safe speed,
+    # ``follow_safe_braking`` below); 0 gain: off
     follow_gain: float = 0.0  # [1/s]
     follow_distance: float = 3.0  # [m] centre to centre (a kart length and a margin)
     follow_time: float = 0.25  # [s]
@@ -96,6 +97,12 @@ class LQNGParams:
     # [m] also keep station behind a kart this close sideways to the lateral offset the kart steers for; 0: off
     follow_path_band: float = 0.0
     follow_brake_gain: float = 3.0  # [1/s] deceleration per m/s above the station-keeping speed
+    # [m/s^2] > 0: keep station by the safe-speed rule of Gipps' car-following model instead (fast enough to stop
+    # ``follow_distance`` short of where the kart ahead would stop, both braking at this rate, this kart after
+    # ``follow_time`` at its speed): it closes up on a slower kart where braking leaves room and holds back where
+    # it does not; 0: the linear rule above
+    follow_safe_braking: float = 0.0
+    follow_distance_curve: float = 0.0  # [m] > 0: ``follow_distance`` in curves (straights keep the other)
     # [m] a kart less than this ahead is alongside, not ahead (the referee's alongside rule): lane discipline,
     # not braking, keeps the two apart
     follow_min_ahead: float = 1.0
@@ -113,11 +120,13 @@ class LQNGParams:
 # ``mcts-lqng``: the game's speed bins are coarse, so planned speeds are a ceiling 3 m/s above the bin and the
 # racing line's speed profile binds. Steering at most 5/s (lock to lock in 0.4 s) only clips the rare jumps of
 # the solved input (up to 50/s where a new plan or a kart entering the game moves the aim point); the races it
-# was sampled on had the same winners within 0.03 s (results/issue11/session9/README.md). Station keeping 0.15 s
-# (not 0.25 s) behind a kart whose centre is within 1.0 m (not 1.6 m) of its own sideways, or within 1.2 m of
-# where it steers: the old spacing held it so far back, and so long after it had started to pull out, that it
-# followed a kart 15% slower home on complex; now it passes one 10% slower (8% slower in half the starts), and
-# every race against an equal kart ends as before (results/issue11/session17/README.md). A pass planned on a straight
+# was sampled on had the same winners within 0.03 s (results/issue11/session9/README.md). Station keeping behind a
+# kart whose centre is within 1.0 m of its own sideways, or within 1.2 m of where it steers (session 17: wider,
+# it followed a kart 15% slower home on complex), by Gipps' safe speed (both braking at 6 m/s^2, this kart after
+# 0.05 s) with a standoff of 2.3 m centre to centre on straights and 3.0 m in curves (session 21: the linear rule,
+# 3 m + 0.15 s x speed, held it 5 m behind on a straight, too far back to dive inside at its end, and braked it
+# at hairpin apexes while the kart ahead accelerated away; the closer standoff in curves led to contacts at
+# fault side by side in hairpins) (results/issue11/session21/README.md). A pass planned on a straight
 # (the next lane clear of the kart ahead by 1.5 m, within 10 m of it) is driven exactly: blended toward the line it
 # stayed in the other's wake, held back by station keeping (results/issue11/session18/README.md); so is one where the
 # kart ahead is predicted to leave the ego's lane (results/issue11/session20/README.md). With its lane changes
@@ -130,7 +139,11 @@ MCTS_TRACKING = LQNGParams(
     pass_distance=10.0,
     pass_on_prediction=True,
     follow_gain=1.0,
-    follow_time=0.15,
+    follow_time=0.05,
+    follow_distance=2.3,
+    follow_distance_curve=3.0,
+    follow_safe_braking=6.0,
+    follow_brake_gain=10.0,
     follow_band=1.0,
     follow_path_band=1.2,
     steer_rate=5.0,
@@ -289,7 +302,7 @@ class LQNGTracker:
                 return True
         return False
 
-    def _station_limit(self, kart: KartView, others: list[KartView], aim_offset: float) -> float:
+    def _station_limit(self, kart: KartView, others: list[KartView], aim_offset: float, straight: bool = True) -> float:
         """Highest speed [m/s] that keeps station behind the nearest kart ahead in ``kart``'s path (inf: none):
         within ``follow_band`` of it sideways, or within ``follow_path_band`` of ``aim_offset``, the lateral offset
         it steers for (a kart pulling out to pass leaves the other behind it; one cutting in behind does not).
@@ -306,9 +319,22 @@ class LQNGTracker:
             in_path = abs(aside) < p.follow_band or abs(other.lateral - aim_offset) < p.follow_path_band
             if ahead <= p.follow_min_ahead or not in_path:
                 continue
+            if p.follow_safe_braking > 0.0:
+                standoff = p.follow_distance if straight or p.follow_distance_curve <= 0.0 else p.follow_distance_curve
+                limit = min(limit, self._safe_speed(ahead - standoff, other.speed))
+                continue
             gap = ahead - (p.follow_distance + p.follow_time * kart.speed)
             limit = min(limit, max(other.speed + p.follow_gain * gap, 0.0))
         return limit
+
+    def _safe_speed(self, room_ahead: float, other_speed: float) -> float:
+        """Gipps' safe speed [m/s] behind a kart at ``other_speed`` with ``room_ahead`` m to spare beyond the
+        standoff: the highest v with v * tau + v^2 / 2b <= room_ahead + other_speed^2 / 2b (tau: ``follow_time``,
+        b: ``follow_safe_braking``)."""
+        p = self.params
+        b, tau = p.follow_safe_braking, p.follow_time
+        room = (b * tau) ** 2 + other_speed**2 + 2.0 * b * room_ahead
+        return max(math.sqrt(room) - b * tau, 0.0) if room > 0.0 else 0.0
 
     def _speed_target(self, kart: KartView, first: Waypoint, second: Waypoint, top: float, brake: float) -> float:
         p = self.params
@@ -350,7 +376,8 @@ class LQNGTracker:
             speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
             if i == 0:
                 if self.params.follow_gain > 0.0:
-                    station = self._station_limit(me, others, aim_offset)
+                    straight = track.section_is_straight(me.checkpoints_passed)
+                    station = self._station_limit(me, others, aim_offset, straight)
                 speed = min(speed * self.params.speed_scale, station)
             targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))
         Q, q = self._costs(players, targets, plan)

@@ -83,21 +83,48 @@ def _kart(index: int, x: float, y: float, speed: float) -> KartView:
 
 
 def test_station_keeping_holds_behind_a_kart_in_its_path_and_not_beside_it() -> None:
-    """mcts-lqng's tracker keeps station (0.15 s + 3 m) behind a slower kart within 1.0 m of it sideways, or within
-    1.2 m of where it steers; pulling out to pass, 1.3 m aside and steering 2.5 m away, it is free to go by."""
+    """mcts-lqng's tracker keeps station behind a slower kart within 1.0 m of it sideways, or within 1.2 m of where
+    it steers; pulling out to pass, 1.3 m aside and steering 2.5 m away, it is free to go by."""
     tracker = LQNGTracker(MCTS_TRACKING)
     me = _kart(0, 0.0, 0.0, 15.0)
-    gap = MCTS_TRACKING.follow_distance + MCTS_TRACKING.follow_time * me.speed
     slower = 13.0
+    gap = MCTS_TRACKING.follow_distance + MCTS_TRACKING.follow_time * slower  # the standoff at the other's speed
     straight_ahead = _kart(1, gap, 0.5, slower)
-    assert tracker._station_limit(me, [straight_ahead], aim_offset=2.5) == slower
+    assert tracker._station_limit(me, [straight_ahead], aim_offset=2.5) == pytest.approx(slower)
     beside_the_path = _kart(1, gap, 1.3, slower)
     assert tracker._station_limit(me, [beside_the_path], aim_offset=-1.2) == math.inf  # pulling out the other way
-    assert tracker._station_limit(me, [beside_the_path], aim_offset=1.0) == slower  # cutting in behind it
+    assert tracker._station_limit(me, [beside_the_path], aim_offset=1.0) == pytest.approx(slower)  # cutting in
     closer = _kart(1, gap - 1.0, 0.5, slower)
-    assert tracker._station_limit(me, [closer], aim_offset=0.0) == slower - MCTS_TRACKING.follow_gain * 1.0
+    assert tracker._station_limit(me, [closer], aim_offset=0.0) < slower
     alongside = _kart(1, MCTS_TRACKING.follow_min_ahead, 0.2, slower)
     assert tracker._station_limit(me, [alongside], aim_offset=0.0) == math.inf  # the alongside rule, not braking
+
+
+def test_the_safe_speed_is_gipps_hand_checked_and_stops_short_of_a_kart_braking_ahead() -> None:
+    """Gipps' safe speed with b = 6 m/s^2, tau = 0.05 s, a 2.3 m standoff on straights and 3.0 m in curves: behind
+    a standing kart 5.3 m (6.0 m in a curve) ahead, v = sqrt(0.3^2 + 2 * 6 * 3) - 0.3 = 5.7075 m/s. The oracle: a
+    kart at the safe speed that brakes at b after tau stops, with the kart ahead braking at b from its speed, no
+    closer than the standoff."""
+    assert (MCTS_TRACKING.follow_safe_braking, MCTS_TRACKING.follow_time) == (6.0, 0.05)
+    assert (MCTS_TRACKING.follow_distance, MCTS_TRACKING.follow_distance_curve) == (2.3, 3.0)
+    tracker = LQNGTracker(MCTS_TRACKING)
+    me = _kart(0, 0.0, 0.0, 9.0)
+    expected = math.sqrt(0.3**2 + 2 * 6.0 * 3.0) - 0.3
+    assert tracker._station_limit(me, [_kart(1, 5.3, 0.0, 0.0)], 0.0, straight=True) == pytest.approx(expected)
+    assert tracker._station_limit(me, [_kart(1, 6.0, 0.0, 0.0)], 0.0, straight=False) == pytest.approx(expected)
+    assert tracker._station_limit(me, [_kart(1, 2.3, 0.0, 0.0)], 0.0, straight=True) == 0.0  # at the standoff
+    b, tau, standoff = 6.0, 0.05, 2.3
+    for ahead, other_speed in ((4.0, 14.0), (8.0, 10.0), (3.0, 5.0), (12.0, 2.0)):
+        v = tracker._station_limit(me, [_kart(1, ahead, 0.0, other_speed)], 0.0, straight=True)
+        follower_stop = v * tau + v * v / (2 * b)
+        leader_stop = ahead + other_speed**2 / (2 * b)
+        assert leader_stop - follower_stop == pytest.approx(standoff)
+        # the gap along the way never falls below the standoff (both braking at b, the follower after tau)
+        t = np.linspace(0.0, tau + v / b, 400)
+        follower = np.where(t < tau, v * t, v * tau + v * (t - tau) - 0.5 * b * (t - tau) ** 2)
+        leader_t = np.minimum(t, other_speed / b)
+        leader = ahead + other_speed * leader_t - 0.5 * b * leader_t**2
+        assert (leader - follower).min() >= standoff - 1e-9
 
 
 def _on_oval(index: int, progress: float, lateral: float, passed: int, speed: float = 14.0) -> KartView:
