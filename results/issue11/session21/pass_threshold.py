@@ -12,24 +12,25 @@ Run from the repo root (one JSON line per race, then one summary line per settin
 from __future__ import annotations
 
 import importlib.util
-from dataclasses import replace
 from pathlib import Path
+from types import ModuleType
 
 import typer
 
-from controllers.hierarchical import HierarchicalController
-from controllers.lq.tracker import LQNGTracker
-from controllers.race import RaceSpec, run_race
-from controllers.registry import make_controller
 
-_SESSION20 = Path(__file__).parents[1] / "session20" / "pass_threshold.py"
-_spec = importlib.util.spec_from_file_location("session20", _SESSION20)
-assert _spec is not None and _spec.loader is not None
-session20 = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(session20)
+def _load(name: str, path: Path) -> ModuleType:
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+session20 = _load("session20", Path(__file__).parents[1] / "session20" / "pass_threshold.py")
+sweep = _load("sweep", Path(__file__).parent / "sweep" / "sweep.py")
 
 # session 20's station keeping, on the shipped tracker
-SESSION20_STATION = {
+SESSION20_STATION: dict[str, float] = {
     "follow_safe_braking": 0.0,
     "follow_time": 0.15,
     "follow_distance": 3.0,
@@ -40,23 +41,8 @@ SESSION20_STATION = {
 
 def race(track: str, setting: str, scale: float, seed: int) -> dict[str, object]:
     """One race from lane 2, seed ``seed``; ``session20``: the tracker with session 20's station keeping."""
-    driver = make_controller("mcts-lqng")
-    if setting == "session20":
-        assert isinstance(driver, HierarchicalController) and isinstance(driver.tracker, LQNGTracker)
-        driver.tracker = LQNGTracker(replace(driver.tracker.params, **SESSION20_STATION))  # type: ignore[arg-type]
-    spec = RaceSpec(track=track, controllers=("mcts-lqng", "fixed-lqng"), seed=seed, start_lanes=(2, 3))
-    karts = run_race(spec, drivers=[driver, make_controller("fixed-lqng", speed_scale=scale)]).result.karts
-    times = [k.finish_time if k.finish_time is not None else float("inf") for k in karts]
-    return {
-        "setting": setting,
-        "scale": scale,
-        "seed": seed,
-        "won": times[0] < times[1],
-        "margin": round(times[0] - times[1], 2),
-        "passes": [k.passes for k in karts],
-        "faults": [k.collisions_at_fault for k in karts],
-        "illegal": [k.illegal_lane_changes for k in karts],
-    }
+    overrides = SESSION20_STATION if setting == "session20" else {}
+    return {"setting": setting, **sweep.race((track, overrides, scale, seed, (2, 3)))}
 
 
 session20.SETTINGS = ("shipped", "session20")
