@@ -127,6 +127,21 @@ def test_a_pass_under_way_is_finished_against_a_kart_7_percent_slower(seed: int)
     assert tactical.collisions_at_fault == 0 and tactical.illegal_lane_changes == 0
 
 
+@pytest.mark.parametrize("seed", [0, 6])
+def test_close_station_keeping_sets_up_the_pass_of_a_kart_7_percent_slower_over_3_laps(seed: int) -> None:
+    """The paper's 3 laps from lane 2 against a kart at 93% of its speed targets: session 20's mcts-lqng followed
+    it home from these seeds (0.38 s and 0.46 s behind), kept 5 m back on the straights by the linear station-keeping
+    rule; at Gipps' safe speed with a 2.3 m standoff on straights it closes up, dives inside and wins, breaking no
+    rule (results/issue11/session21/README.md)."""
+    spec = RaceSpec(track="complex", controllers=("mcts-lqng", "fixed-lqng"), seed=seed, start_lanes=(2, 3))
+    drivers = [make_controller("mcts-lqng"), make_controller("fixed-lqng", speed_scale=0.93)]
+    tactical, slow = run_race(spec, drivers=drivers).result.karts
+    assert tactical.passes >= 1
+    assert tactical.finish_time is not None and slow.finish_time is not None
+    assert tactical.finish_time < slow.finish_time
+    assert tactical.collisions_at_fault == 0 and tactical.illegal_lane_changes == 0
+
+
 @pytest.mark.parametrize(("seed", "lanes"), [(615434538, (2, 3)), (1889878166, (2, 3))])
 def test_behind_a_faster_kart_it_makes_no_illegal_lane_change(seed: int, lanes: tuple[int, int]) -> None:
     """Two races of the paper grid on the oval (session 18, commit b5babe2): behind mcts-rl or e2e, mcts-lqng drove
