@@ -77,8 +77,9 @@ def test_a_reduced_grid_runs_in_the_background_with_progress_and_stored_races(cl
     assert stats == tournament["stats"]
     assert set(stats["tracks"]) == {"oval", "combined"}
     oval = stats["tracks"]["oval"]
-    assert set(oval) == {"wins", "safety", "tests"}
+    assert set(oval) == {"wins", "safety", "start_lanes", "tests"}
     assert oval["safety"]["fixed-lqng"]["races"] == 2
+    assert oval["start_lanes"]["races"] == 2 and set(oval["start_lanes"]["by_lane"]) == {"2", "3"}
     assert {"per_step", "checkpoint", "rule"} <= set(oval["safety"]["fixed-lqng"]["illegal_lane_changes"])
     listed = client.get("/api/tournaments").json()
     assert "api-small" in [t["id"] for t in listed] and all(t["races"] is None for t in listed)
