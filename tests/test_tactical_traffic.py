@@ -93,19 +93,24 @@ def test_four_kart_race_plans_never_collapse() -> None:
     assert min(metrics.shortest_plan.values()) >= horizon, metrics.shortest_plan
 
 
+def _pass_a_slower_kart(speed_scale: float, seed: int, laps: int) -> None:
+    """mcts-lqng from lane 2 of complex against fixed-lqng at ``speed_scale``: it must pass, win, and break no
+    rule."""
+    spec = RaceSpec(track="complex", controllers=("mcts-lqng", "fixed-lqng"), laps=laps, seed=seed, start_lanes=(2, 3))
+    drivers = [make_controller("mcts-lqng"), make_controller("fixed-lqng", speed_scale=speed_scale)]
+    tactical, slow = run_race(spec, drivers=drivers).result.karts
+    assert tactical.passes >= 1
+    assert tactical.finish_time is not None and slow.finish_time is not None
+    assert tactical.finish_time < slow.finish_time
+    assert tactical.collisions_at_fault == 0 and tactical.illegal_lane_changes == 0
+
+
 @pytest.mark.parametrize("speed_scale", [0.85, 0.9])
 def test_a_faster_tactical_kart_passes_a_slower_one_by_the_rules(speed_scale: float) -> None:
     """Started on the outside of complex's first corner, mcts-lqng comes out of it behind a line follower that
     drives at 85% or 90% of its speed targets; it must get past it and win, with no collision at fault and no
     illegal lane change. (Until session 17 it followed such a kart home, 0.46 s behind after 3 laps.)"""
-    spec = RaceSpec(track="complex", controllers=("mcts-lqng", "fixed-lqng"), laps=2, seed=0, start_lanes=(2, 3))
-    drivers = [make_controller("mcts-lqng"), make_controller("fixed-lqng", speed_scale=speed_scale)]
-    tactical, slow = run_race(spec, drivers=drivers).result.karts
-    assert tactical.finished and slow.finished
-    assert tactical.passes >= 1
-    assert tactical.finish_time is not None and slow.finish_time is not None
-    assert tactical.finish_time < slow.finish_time
-    assert tactical.collisions_at_fault == 0 and tactical.illegal_lane_changes == 0
+    _pass_a_slower_kart(speed_scale, seed=0, laps=2)
 
 
 @pytest.mark.parametrize("seed", [2, 4, 14])
@@ -118,13 +123,7 @@ def test_a_pass_under_way_is_finished_against_a_kart_7_percent_slower(seed: int)
     leave the ego's lane, but the tracker, seeing both in one lane, blended it back into the wake (now
     ``pass_on_prediction`` drives it). Of 11 such starts, 10 pass now, 6 with session 19's tracker, none with
     session 17's (results/issue11/session20/README.md)."""
-    spec = RaceSpec(track="complex", controllers=("mcts-lqng", "fixed-lqng"), laps=2, seed=seed, start_lanes=(2, 3))
-    drivers = [make_controller("mcts-lqng"), make_controller("fixed-lqng", speed_scale=0.93)]
-    tactical, slow = run_race(spec, drivers=drivers).result.karts
-    assert tactical.passes >= 1
-    assert tactical.finish_time is not None and slow.finish_time is not None
-    assert tactical.finish_time < slow.finish_time
-    assert tactical.collisions_at_fault == 0 and tactical.illegal_lane_changes == 0
+    _pass_a_slower_kart(0.93, seed=seed, laps=2)
 
 
 @pytest.mark.parametrize("seed", [0, 6])
@@ -133,13 +132,7 @@ def test_close_station_keeping_sets_up_the_pass_of_a_kart_7_percent_slower_over_
     it home from these seeds (0.38 s and 0.46 s behind), kept 5 m back on the straights by the linear station-keeping
     rule; at Gipps' safe speed with a 2.3 m standoff on straights it closes up, dives inside and wins, breaking no
     rule (results/issue11/session21/README.md)."""
-    spec = RaceSpec(track="complex", controllers=("mcts-lqng", "fixed-lqng"), seed=seed, start_lanes=(2, 3))
-    drivers = [make_controller("mcts-lqng"), make_controller("fixed-lqng", speed_scale=0.93)]
-    tactical, slow = run_race(spec, drivers=drivers).result.karts
-    assert tactical.passes >= 1
-    assert tactical.finish_time is not None and slow.finish_time is not None
-    assert tactical.finish_time < slow.finish_time
-    assert tactical.collisions_at_fault == 0 and tactical.illegal_lane_changes == 0
+    _pass_a_slower_kart(0.93, seed=seed, laps=3)
 
 
 @pytest.mark.parametrize(("seed", "lanes"), [(615434538, (2, 3)), (1889878166, (2, 3))])
