@@ -48,7 +48,13 @@ from controllers.base import Controller
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController, LaneFollowerParams
-from controllers.lq.tracker import FIXED_LINE_TRACKING, MCTS_TRACKING, LQNGTracker
+from controllers.lq.tracker import (
+    CLOSE_FOLLOWING_HELP,
+    CLOSE_FOLLOWING_TRACKING,
+    FIXED_LINE_TRACKING,
+    MCTS_TRACKING,
+    LQNGTracker,
+)
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
 from controllers.rl.agents import E2EParams, FixedRLParams, MCTSRLParams, build_e2e, build_fixed_rl, build_mcts_rl
 from controllers.tactical.high_level import (
@@ -120,6 +126,7 @@ class MCTSLQNGParams:
 
     pace_model: bool = parameter(True, PACE_MODEL_HELP)
     own_pace: float = parameter(1.0, OWN_PACE_HELP, minimum=0.8, maximum=1.3)
+    close_following: bool = parameter(False, CLOSE_FOLLOWING_HELP)
 
 
 @dataclass(frozen=True)
@@ -140,7 +147,8 @@ class FixedLQNGParams:
 
 def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
     planner = MCTSPlanner.from_settings(params, hold_gain=params.hold_gain_s)
-    tracker = LQNGTracker(replace(MCTS_TRACKING, horizon=params.lqng_horizon_steps))
+    tracking = CLOSE_FOLLOWING_TRACKING if params.close_following else MCTS_TRACKING
+    tracker = LQNGTracker(replace(tracking, horizon=params.lqng_horizon_steps))
     return HierarchicalController("mcts-lqng", planner, tracker)
 
 

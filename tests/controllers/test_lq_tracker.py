@@ -12,7 +12,7 @@ import pytest
 
 from controllers.base import Action, RaceContext
 from controllers.hierarchical import HierarchicalController
-from controllers.lq.tracker import MCTS_TRACKING, LQNGParams, LQNGTracker
+from controllers.lq.tracker import CLOSE_FOLLOWING_TRACKING, MCTS_TRACKING, LQNGParams, LQNGTracker
 from controllers.plan import Plan, Waypoint
 from controllers.race import RaceSpec, run_race
 from controllers.registry import make_controller
@@ -83,31 +83,36 @@ def _kart(index: int, x: float, y: float, speed: float) -> KartView:
 
 
 def test_station_keeping_holds_behind_a_kart_in_its_path_and_not_beside_it() -> None:
-    """mcts-lqng's tracker keeps station behind a slower kart within 1.0 m of it sideways, or within 1.2 m of where
-    it steers; pulling out to pass, 1.3 m aside and steering 2.5 m away, it is free to go by."""
+    """mcts-lqng's tracker keeps station (0.15 s + 3 m) behind a slower kart within 1.0 m of it sideways, or within
+    1.2 m of where it steers; pulling out to pass, 1.3 m aside and steering 2.5 m away, it is free to go by."""
     tracker = LQNGTracker(MCTS_TRACKING)
     me = _kart(0, 0.0, 0.0, 15.0)
+    gap = MCTS_TRACKING.follow_distance + MCTS_TRACKING.follow_time * me.speed
     slower = 13.0
-    gap = MCTS_TRACKING.follow_distance + MCTS_TRACKING.follow_time * slower  # the standoff at the other's speed
     straight_ahead = _kart(1, gap, 0.5, slower)
-    assert tracker._station_limit(me, [straight_ahead], aim_offset=2.5) == pytest.approx(slower)
+    assert tracker._station_limit(me, [straight_ahead], aim_offset=2.5) == slower
     beside_the_path = _kart(1, gap, 1.3, slower)
     assert tracker._station_limit(me, [beside_the_path], aim_offset=-1.2) == math.inf  # pulling out the other way
-    assert tracker._station_limit(me, [beside_the_path], aim_offset=1.0) == pytest.approx(slower)  # cutting in
+    assert tracker._station_limit(me, [beside_the_path], aim_offset=1.0) == slower  # cutting in behind it
     closer = _kart(1, gap - 1.0, 0.5, slower)
-    assert tracker._station_limit(me, [closer], aim_offset=0.0) < slower
+    assert tracker._station_limit(me, [closer], aim_offset=0.0) == slower - MCTS_TRACKING.follow_gain * 1.0
     alongside = _kart(1, MCTS_TRACKING.follow_min_ahead, 0.2, slower)
     assert tracker._station_limit(me, [alongside], aim_offset=0.0) == math.inf  # the alongside rule, not braking
 
 
 def test_the_safe_speed_is_gipps_hand_checked_and_stops_short_of_a_kart_braking_ahead() -> None:
-    """Gipps' safe speed with b = 6 m/s^2, tau = 0.05 s, a 2.3 m standoff on straights and 3.0 m in curves: behind
-    a standing kart 5.3 m (6.0 m in a curve) ahead, v = sqrt(0.3^2 + 2 * 6 * 3) - 0.3 = 5.7075 m/s. The oracle: a
-    kart at the safe speed that brakes at b after tau stops, with the kart ahead braking at b from its speed, no
-    closer than the standoff."""
-    assert (MCTS_TRACKING.follow_safe_braking, MCTS_TRACKING.follow_time) == (6.0, 0.05)
-    assert (MCTS_TRACKING.follow_distance, MCTS_TRACKING.follow_distance_curve) == (2.3, 3.0)
-    tracker = LQNGTracker(MCTS_TRACKING)
+    """``close_following``'s station keeping: Gipps' safe speed with b = 6 m/s^2, tau = 0.05 s, a 2.3 m standoff
+    on straights and 3.0 m in curves. Behind a standing kart 5.3 m (6.0 m in a curve) ahead, v = sqrt(0.3^2 + 2 *
+    6 * 3) - 0.3 = 5.7075 m/s. The oracle: a kart at the safe speed that brakes at b after tau stops, with the kart
+    ahead braking at b from its speed, no closer than the standoff."""
+    close = CLOSE_FOLLOWING_TRACKING
+    assert (close.follow_safe_braking, close.follow_time, close.follow_distance, close.follow_distance_curve) == (
+        6.0,
+        0.05,
+        2.3,
+        3.0,
+    )
+    tracker = LQNGTracker(close)
     me = _kart(0, 0.0, 0.0, 9.0)
     expected = math.sqrt(0.3**2 + 2 * 6.0 * 3.0) - 0.3
     assert tracker._station_limit(me, [_kart(1, 5.3, 0.0, 0.0)], 0.0, straight=True) == pytest.approx(expected)

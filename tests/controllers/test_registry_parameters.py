@@ -15,7 +15,7 @@ from controllers.base import Action, RaceContext
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController
-from controllers.lq.tracker import FIXED_LINE_TRACKING, MCTS_TRACKING, LQNGTracker
+from controllers.lq.tracker import CLOSE_FOLLOWING_TRACKING, FIXED_LINE_TRACKING, MCTS_TRACKING, LQNGTracker
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of
 from controllers.registry import (
     REGISTRY,
@@ -59,6 +59,7 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
         "hold_gain_s": "0.05",
         "pace_model": "True",
         "own_pace": "1.0",
+        "close_following": "False",
     }
     assert dict(REGISTRY["fixed-lqng"].parameters) == {
         "line_margin_m": "1.0",
@@ -83,6 +84,10 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
     assert driver.planner.rate_hz == 2.0 and isinstance(driver.planner.rate_hz, float)
     assert driver.tracker.params.horizon == 6
     assert driver.planner.deviation_gain == 0.3 and driver.planner.hold_gain == 0.2
+    assert driver.tracker.params.follow_safe_braking == 0.0  # the linear station-keeping rule by default
+    close = make_controller("mcts-lqng", close_following=True, lqng_horizon_steps=6)
+    assert isinstance(close, HierarchicalController) and isinstance(close.tracker, LQNGTracker)
+    assert close.tracker.params == dataclasses.replace(CLOSE_FOLLOWING_TRACKING, horizon=6)
     searched = make_controller("mcts-lqng", racing_line_default=False)
     assert isinstance(searched, HierarchicalController) and isinstance(searched.planner, MCTSPlanner)
     assert searched.planner.deviation_gain is None  # the search's lanes, as mcts-rl's by default
