@@ -146,11 +146,10 @@ class LaneRecord:
 
 @dataclass(frozen=True)
 class PairLanes:
-    """Agent ``a``'s record against ``b`` by ``a``'s start lane, and Fisher's exact test of whether its share of
-    the decided races depends on that lane (``None`` unless it started from exactly two lanes)."""
+    """One agent's record against another (the pair is its key in :class:`StartLanes`) by its start lane, and
+    Fisher's exact test of whether its share of the decided races depends on that lane (``None`` unless it
+    started from exactly two lanes)."""
 
-    a: str
-    b: str
     by_lane: Mapping[int, LaneRecord]
     fisher_p: float | None
 
@@ -173,15 +172,15 @@ class StartLanes:
     by_lane: Mapping[int, LaneRecord]
     pairs: Mapping[tuple[str, str], PairLanes]
 
-    def to_json(self, agents: Sequence[str]) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         """``{"races": n, "by_lane": {LANE: {...}}, "pairs": {A: {B: {...}}}}``."""
-        pairs: dict[str, dict[str, Any]] = {a: {} for a in agents}
+        pairs: dict[str, dict[str, Any]] = {}
         for (a, b), split in self.pairs.items():
-            pairs[a][b] = split.to_json()
+            pairs.setdefault(a, {})[b] = split.to_json()
         return {
             "races": self.races,
             "by_lane": {str(lane): record.to_json() for lane, record in self.by_lane.items()},
-            "pairs": {a: row for a, row in pairs.items() if row},
+            "pairs": pairs,
         }
 
 
@@ -224,7 +223,7 @@ class TrackStats:
         return {
             "wins": {a: dict(self.wins[a]) for a in self.agents},
             "safety": {a: self.agent_stats[a].to_json() for a in self.agents},
-            "start_lanes": self.start_lanes.to_json(self.agents),
+            "start_lanes": self.start_lanes.to_json(),
             "tests": {
                 "alpha": ALPHA,
                 "wins": win_tests,
@@ -366,7 +365,7 @@ def start_lane_table(races: Sequence[RaceFigures], agents: Sequence[str]) -> Sta
         if len(by_lane) == 2:
             table = [[r.wins, r.losses] for r in by_lane.values()]
             p = float(scipy_stats.fisher_exact(table).pvalue)
-        pairs[pair] = PairLanes(pair[0], pair[1], by_lane, p)
+        pairs[pair] = PairLanes(by_lane, p)
     by_lane = {lane: _lane_record(per_lane[lane]) for lane in sorted(per_lane)}
     ordered = dict(sorted(pairs.items(), key=lambda item: (agents.index(item[0][0]), agents.index(item[0][1]))))
     return StartLanes(len(known), by_lane, ordered)

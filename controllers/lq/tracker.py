@@ -388,7 +388,10 @@ class LQNGTracker:
             speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
             if i == 0:
                 if self.params.follow_gain > 0.0:
-                    straight = track.section_is_straight(me.checkpoints_passed)
+                    # only the curve standoff of the safe-speed rule needs the section (not looked up per step else)
+                    straight = self.params.follow_distance_curve <= 0.0 or track.section_is_straight(
+                        me.checkpoints_passed
+                    )
                     station = self._station_limit(me, others, aim_offset, straight)
                 speed = min(speed * self.params.speed_scale, station)
             targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))
