@@ -126,7 +126,7 @@ class MCTSLQNGParams:
 
     pace_model: bool = parameter(True, PACE_MODEL_HELP)
     own_pace: float = parameter(1.0, OWN_PACE_HELP, minimum=0.8, maximum=1.3)
-    close_following: bool = parameter(False, CLOSE_FOLLOWING_HELP)
+    close_following: bool = parameter(True, CLOSE_FOLLOWING_HELP)
 
 
 @dataclass(frozen=True)

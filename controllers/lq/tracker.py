@@ -42,6 +42,15 @@ def _lane_correction(lane_offset: float, line_offset: float, tolerance: float) -
     return 0.0 if abs(gap) <= tolerance else gap - math.copysign(tolerance, gap)
 
 
+def _within(rule: tuple[float, float] | None, discipline: tuple[float, float] | None) -> tuple[float, float] | None:
+    """The lateral bounds both the lane rule's ``rule`` and the alongside ``discipline`` allow; the rule's alone
+    where the two do not overlap (holding a lane boundary beats closing a little on a kart alongside)."""
+    if rule is None or discipline is None:
+        return rule or discipline
+    lowest, highest = max(rule[0], discipline[0]), min(rule[1], discipline[1])
+    return (lowest, highest) if lowest <= highest else rule
+
+
 @dataclass(frozen=True)
 class LQNGWeights:
     """Weights of the tracker's game (defaults follow the original's magnitudes, spec section 5)."""
@@ -106,6 +115,14 @@ class LQNGParams:
     # [m] a kart less than this ahead is alongside, not ahead (the referee's alongside rule): lane discipline,
     # not braking, keeps the two apart
     follow_min_ahead: float = 1.0
+    # [m] > 0: alongside discipline. With another kart alongside (centres closer than ``alongside_reach`` along the
+    # track), steer for no offset nearer to it sideways than this (centre to centre), and where the two are
+    # already closer, for one no nearer than the present offset plus ``alongside_push``: the kart that moves
+    # sideways into another alongside is at fault (the referee's alongside rule), and a line that runs out of a
+    # corner across the other kart's did exactly that; 0: off
+    alongside_clearance: float = 0.0
+    alongside_reach: float = 2.5  # [m] a body length (2 m) and a margin
+    alongside_push: float = 0.2  # [m]
     # on a straight with its lane changes spent (eq. (11) gen_lane_lim, counted as they happen), steer for no point
     # beyond the lanes the changes left reach, ``lane_guard_margin`` [m] short of the boundary: blending toward
     # the line and the next curve's lane otherwise crosses a boundary before the curve begins
@@ -142,6 +159,7 @@ MCTS_TRACKING = LQNGParams(
     follow_path_band=1.2,
     steer_rate=5.0,
     lane_rule_guard=True,
+    alongside_clearance=1.5,
 )
 # ``mcts-lqng`` with ``close_following``: station keeping by Gipps' safe speed (both braking at 6 m/s^2, this kart
 # after 0.05 s; a standoff of 2.3 m centre to centre on straights, 3.0 m in curves). It follows 3.0 m behind at
@@ -339,6 +357,27 @@ class LQNGTracker:
             limit = min(limit, max(other.speed + p.follow_gain * gap, 0.0))
         return limit
 
+    def _alongside_bounds(self, track: Track, me: KartView, others: list[KartView]) -> tuple[float, float] | None:
+        """(lowest, highest) lateral offset [m] the kart may steer for with karts alongside (``alongside_clearance``
+        sideways from each, or ``alongside_push`` further from it than the kart is now where the two are closer
+        than that); None: off, or no kart alongside."""
+        p = self.params
+        if p.alongside_clearance <= 0.0:
+            return None
+        lowest, highest = -math.inf, math.inf
+        for other in others:
+            if abs(track.gap(me.progress, other.progress)) >= p.alongside_reach:
+                continue
+            if other.lateral < me.lateral:  # on the right
+                lowest = max(lowest, min(other.lateral + p.alongside_clearance, me.lateral + p.alongside_push))
+            elif other.lateral > me.lateral:
+                highest = min(highest, max(other.lateral - p.alongside_clearance, me.lateral - p.alongside_push))
+        if lowest == -math.inf and highest == math.inf:
+            return None
+        if lowest > highest:  # a kart on each side: hold the line between them
+            return me.lateral, me.lateral
+        return lowest, highest
+
     def _safe_speed(self, room_ahead: float, other_speed: float) -> float:
         """Gipps' safe speed [m/s] behind a kart at ``other_speed`` with ``room_ahead`` m to spare beyond the
         standoff: the highest v with v * tau + v^2 / 2b <= room_ahead + other_speed^2 / 2b (tau: ``follow_time``,
@@ -382,7 +421,9 @@ class LQNGTracker:
             # positions relative to the ego kart keep the numbers small
             x0[STATE_SIZE * i : STATE_SIZE * i + 3] = (k.x - me.x, k.y - me.y, k.speed)
             first, second = self._upcoming(track, k, plan, k.index)
-            bounds = self._lane_rule_bounds(track, k) if i == 0 else None
+            bounds = (
+                _within(self._lane_rule_bounds(track, k), self._alongside_bounds(track, k, others)) if i == 0 else None
+            )
             ax, ay, aim_offset = self._aim(track, k, first, second, tolerance, bounds)
             heading_error = math.remainder(math.atan2(ay - k.y, ax - k.x) - k.heading, 2.0 * math.pi)
             speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
