@@ -42,6 +42,12 @@ def _lane_correction(lane_offset: float, line_offset: float, tolerance: float) -
     return 0.0 if abs(gap) <= tolerance else gap - math.copysign(tolerance, gap)
 
 
+def _rate_across(track: Track, kart: KartView) -> float:
+    """The kart's velocity across the track [m/s], left-positive, from its heading against the centre line's."""
+    _, tangent = track.point_at(kart.progress)
+    return kart.speed * (math.sin(kart.heading) * float(tangent[0]) - math.cos(kart.heading) * float(tangent[1]))
+
+
 def _within(rule: tuple[float, float] | None, discipline: tuple[float, float] | None) -> tuple[float, float] | None:
     """The lateral bounds both the lane rule's ``rule`` and the alongside ``discipline`` allow; the rule's alone
     where the two do not overlap (holding a lane boundary beats closing a little on a kart alongside)."""
@@ -115,6 +121,11 @@ class LQNGParams:
     # [m] a kart less than this ahead is alongside, not ahead (the referee's alongside rule): lane discipline,
     # not braking, keeps the two apart
     follow_min_ahead: float = 1.0
+    # [s] > 0: a kart ahead (by more than ``follow_min_ahead``) also counts as in the path when, both carried on at
+    # their present rates across the track, it would be within ``follow_band`` sideways within this time: a kart
+    # drifting over in front is braked for before it is there (following 1.7 m behind a kart 1.5 m aside, close
+    # following was hit by it as it drifted across, a collision at fault by the follower); 0: off
+    follow_predict_time: float = 0.0
     # [m] > 0: alongside discipline. With another kart alongside (centres closer than ``alongside_reach`` along the
     # track), steer for no offset nearer to it sideways than this (centre to centre), and where the two are
     # already closer, for one no nearer than the present offset plus ``alongside_push``: the kart that moves
@@ -160,6 +171,7 @@ MCTS_TRACKING = LQNGParams(
     steer_rate=5.0,
     lane_rule_guard=True,
     alongside_clearance=1.5,
+    follow_predict_time=0.4,
 )
 # ``mcts-lqng`` with ``close_following``: station keeping by Gipps' safe speed (both braking at 6 m/s^2, this kart
 # after 0.05 s; a standoff of 2.3 m centre to centre on straights, 3.0 m in curves). It follows 3.0 m behind at
@@ -332,10 +344,18 @@ class LQNGTracker:
                 return True
         return False
 
-    def _station_limit(self, kart: KartView, others: list[KartView], aim_offset: float, straight: bool = True) -> float:
+    def _station_limit(
+        self,
+        kart: KartView,
+        others: list[KartView],
+        aim_offset: float,
+        straight: bool = True,
+        track: Track | None = None,
+    ) -> float:
         """Highest speed [m/s] that keeps station behind the nearest kart ahead in ``kart``'s path (inf: none):
         within ``follow_band`` of it sideways, or within ``follow_path_band`` of ``aim_offset``, the lateral offset
-        it steers for (a kart pulling out to pass leaves the other behind it; one cutting in behind does not).
+        it steers for (a kart pulling out to pass leaves the other behind it; one cutting in behind does not); with
+        ``follow_predict_time`` and the ``track``, also one that drifts that close within that time.
 
         Ahead and aside are measured in the kart's own heading frame (in a hairpin the centre line's progress
         says little about the distance between two karts)."""
@@ -347,6 +367,9 @@ class LQNGTracker:
             ahead = dx * cos_h + dy * sin_h
             aside = -dx * sin_h + dy * cos_h
             in_path = abs(aside) < p.follow_band or abs(other.lateral - aim_offset) < p.follow_path_band
+            if not in_path and track is not None and p.follow_predict_time > 0.0:
+                drift = (_rate_across(track, other) - _rate_across(track, kart)) * p.follow_predict_time
+                in_path = aside * (aside + drift) <= 0.0 or abs(aside + drift) < p.follow_band  # within band by then
             if ahead <= p.follow_min_ahead or not in_path:
                 continue
             if p.follow_safe_braking > 0.0:
@@ -433,7 +456,7 @@ class LQNGTracker:
                     straight = self.params.follow_distance_curve <= 0.0 or track.section_is_straight(
                         me.checkpoints_passed
                     )
-                    station = self._station_limit(me, others, aim_offset, straight)
+                    station = self._station_limit(me, others, aim_offset, straight, track)
                 speed = min(speed * self.params.speed_scale, station)
             targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))
         Q, q = self._costs(players, targets, plan)

@@ -12,7 +12,7 @@ import pytest
 
 from controllers.base import Action, RaceContext
 from controllers.hierarchical import HierarchicalController
-from controllers.lq.tracker import CLOSE_FOLLOWING_TRACKING, MCTS_TRACKING, LQNGParams, LQNGTracker
+from controllers.lq.tracker import CLOSE_FOLLOWING_TRACKING, MCTS_TRACKING, LQNGParams, LQNGTracker, _within
 from controllers.plan import Plan, Waypoint
 from controllers.race import RaceSpec, run_race
 from controllers.registry import make_controller
@@ -254,3 +254,31 @@ def test_with_its_lane_changes_spent_on_a_straight_it_steers_for_no_other_lane()
     _, _, free = tracker._aim(track, me, far_right, far_right, 0.0)
     _, _, aim = tracker._aim(track, me, far_right, far_right, 0.0, (boundary_2_3 + margin, boundary_1_2 - margin))
     assert free < boundary_2_3 and aim == boundary_2_3 + margin
+
+
+def test_alongside_it_steers_for_no_offset_nearer_the_other_kart_than_the_clearance() -> None:
+    """mcts-lqng's alongside discipline: with a kart closer than 2.5 m along the track, it steers for no lateral
+    offset nearer to that kart than 1.5 m centre to centre, and where the two are already closer, for one 0.2 m
+    further from it than it is now (the referee charges the kart that moves sideways into one alongside). Hand
+    checked on the oval's back straight; a kart further along, or the discipline off, leaves it free; a kart on
+    each side holds it where it is. The lane rule's bounds win where the two do not overlap."""
+    track = get_track("oval")
+    assert (MCTS_TRACKING.alongside_clearance, MCTS_TRACKING.alongside_reach) == (1.5, 2.5)
+    assert MCTS_TRACKING.alongside_push == 0.2
+    assert CLOSE_FOLLOWING_TRACKING.alongside_clearance == 1.5
+    s = float(track.checkpoint_s[11]) + 2.0
+    me = _on_oval(0, s, 1.0, 11)
+
+    def bounds(*others: KartView, params: LQNGParams = MCTS_TRACKING) -> tuple[float, float] | None:
+        return LQNGTracker(params)._alongside_bounds(track, me, list(others))
+
+    assert bounds(_on_oval(1, s + 0.5, -1.0, 11)) == pytest.approx((0.5, math.inf))  # on the right, 2 m away
+    assert bounds(_on_oval(1, s - 1.5, 0.0, 11)) == pytest.approx((1.2, math.inf))  # 1 m away: 0.2 m further out
+    assert bounds(_on_oval(1, s + 1.0, 3.0, 11)) == pytest.approx((-math.inf, 1.5))  # on the left
+    assert bounds(_on_oval(1, s + 3.0, 0.0, 11)) is None  # ahead, not alongside: station keeping's business
+    assert bounds(_on_oval(1, s + 0.5, 0.0, 11), params=replace(MCTS_TRACKING, alongside_clearance=0.0)) is None
+    both = bounds(_on_oval(1, s + 0.5, -0.2, 11), _on_oval(2, s - 0.5, 2.2, 11))
+    assert both == pytest.approx((1.0, 1.0))  # hemmed in: hold the line between them
+    assert _within((0.0, 2.0), (0.5, math.inf)) == (0.5, 2.0)
+    assert _within((0.0, 2.0), (2.5, math.inf)) == (0.0, 2.0)  # the lane rule's alone
+    assert _within(None, (0.5, math.inf)) == (0.5, math.inf) and _within((0.0, 2.0), None) == (0.0, 2.0)

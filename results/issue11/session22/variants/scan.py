@@ -57,7 +57,8 @@ def race(args: tuple[str, str, int]) -> str:
     a, b = out.result.karts
     won = (a.finish_time or 1e9) < (b.finish_time or 1e9)
     line = (
-        f"{track} {opponent} seed={seed} lane={lanes[0]} won={int(won)} t={a.finish_time or 0:.2f}/{b.finish_time or 0:.2f} "
+        f"{track} {opponent} seed={seed} lane={lanes[0]} won={int(won)} "
+        f"t={a.finish_time or 0:.2f}/{b.finish_time or 0:.2f} "
         f"faults={a.collisions_at_fault}/{b.collisions_at_fault} passes={a.passes}/{b.passes}"
     )
     return "\n".join([line, *notes])
@@ -66,7 +67,8 @@ def race(args: tuple[str, str, int]) -> str:
 if __name__ == "__main__":
     track, opponent, seeds = sys.argv[1], sys.argv[2], seeds_of(sys.argv[3])
     workers = int(sys.argv[4]) if len(sys.argv) > 4 else 2
-    print(f"# TRACKER={os.environ.get('TRACKER', '{}')} BASE={os.environ.get('BASE', 'default')} OPP_PARAMS={os.environ.get('OPP_PARAMS', '{}')}")
+    settings = {name: os.environ.get(name, default) for name, default in (("TRACKER", "{}"), ("BASE", "default"))}
+    print("# " + " ".join(f"{name}={value}" for name, value in settings.items()))
     wins = faults = 0
     with Pool(workers) as pool:
         for text in pool.imap(race, [(track, opponent, s) for s in seeds]):
