@@ -3,9 +3,13 @@ opponent model, line-calibrated segment times, no plan collapse in a 4-kart race
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
+from controllers.hierarchical import HierarchicalController
+from controllers.lq.tracker import LQNGTracker
 from controllers.race import RaceSpec, run_race
 from controllers.race_metrics import RaceMetrics
 from controllers.racing_line import optimise_racing_line
@@ -128,10 +132,10 @@ def test_a_pass_under_way_is_finished_against_a_kart_7_percent_slower(seed: int)
 
 @pytest.mark.parametrize("seed", [0, 6])
 def test_close_following_sets_up_the_pass_of_a_kart_7_percent_slower_over_3_laps(seed: int) -> None:
-    """The paper's 3 laps from lane 2 against a kart at 93% of its speed targets: mcts-lqng as shipped follows it
-    home from these seeds (0.38 s and 0.46 s behind), kept 5 m back on the straights by the linear station-keeping
-    rule; with ``close_following`` (Gipps' safe speed, 2.3 m standoff on straights) it closes up, dives inside and
-    wins, breaking no rule (results/issue11/session21/README.md)."""
+    """The paper's 3 laps from lane 2 against a kart at 93% of its speed targets: with the linear station-keeping
+    rule (``close_following=false``) mcts-lqng follows it home from these seeds (0.38 s and 0.46 s behind), kept
+    5 m back on the straights; following closely (Gipps' safe speed, 2.3 m standoff on straights; the default since
+    session 22) it closes up, dives inside and wins, breaking no rule (results/issue11/session21/README.md)."""
     _pass_a_slower_kart(0.93, seed=seed, laps=3, close_following=True)
 
 
@@ -166,3 +170,40 @@ def test_from_a_spread_start_it_spends_no_more_lane_changes_than_the_rule_allows
     tactical, line = run_race(spec).result.karts
     assert tactical.finish_time is not None and line.finish_time is not None
     assert tactical.illegal_lane_changes == 0 and tactical.collisions_at_fault == 0
+
+
+def _race_with_tracker(spec: RaceSpec, opponent: str, **tracker_changes: object) -> list[int]:
+    """Collisions at fault of mcts-lqng (kart 0, its tracker's settings changed by ``tracker_changes``) and of
+    ``opponent`` in the race ``spec``."""
+    driver = make_controller("mcts-lqng")
+    assert isinstance(driver, HierarchicalController) and isinstance(driver.tracker, LQNGTracker)
+    driver.tracker = LQNGTracker(replace(driver.tracker.params, **tracker_changes))  # type: ignore[arg-type]
+    karts = run_race(spec, drivers=[driver, make_controller(opponent)]).result.karts
+    assert all(k.finish_time is not None for k in karts)
+    return [k.collisions_at_fault for k in karts]
+
+
+def test_alongside_in_a_curve_it_does_not_steer_into_the_kart_beside_it() -> None:
+    """A race of session 21's spread series on complex-reversed (seed 13, launches up to 0.25 s apart), mcts-lqng
+    from lane 3, following closely: it drew alongside fixed-lqng on the inside of the curve at checkpoint 10, and its
+    line out of the curve closed on the other kart, a collision at fault by the alongside rule. With the alongside
+    discipline it steers for no offset nearer that kart than 1.5 m; the same race without it still collides."""
+    spec = RaceSpec(
+        track="complex-reversed",
+        controllers=("mcts-lqng", "fixed-lqng"),
+        seed=13,
+        start_lanes=(3, 2),
+        start_spread=0.25,
+    )
+    assert _race_with_tracker(spec, "fixed-lqng")[0] == 0
+    assert _race_with_tracker(spec, "fixed-lqng", alongside_clearance=0.0)[0] == 1
+
+
+def test_it_keeps_station_behind_a_kart_drifting_into_its_path() -> None:
+    """A lane-2 start on the oval against e2e (seed 2): following closely, mcts-lqng ran 1.7 m behind e2e and 1.5 m
+    aside, its nose beside e2e's tail, until e2e drifted across it: a collision at fault by the follower. Counting
+    a kart ahead that will be in its path within 0.4 s as in its path, it drops back in time; without that it still
+    collides."""
+    spec = RaceSpec(track="oval", controllers=("mcts-lqng", "e2e"), seed=2, start_lanes=(2, 3))
+    assert _race_with_tracker(spec, "e2e")[0] == 0
+    assert _race_with_tracker(spec, "e2e", follow_predict_time=0.0)[0] == 1

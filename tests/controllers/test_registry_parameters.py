@@ -59,7 +59,7 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
         "hold_gain_s": "0.05",
         "pace_model": "True",
         "own_pace": "1.0",
-        "close_following": "False",
+        "close_following": "True",
     }
     assert dict(REGISTRY["fixed-lqng"].parameters) == {
         "line_margin_m": "1.0",
@@ -84,10 +84,11 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
     assert driver.planner.rate_hz == 2.0 and isinstance(driver.planner.rate_hz, float)
     assert driver.tracker.params.horizon == 6
     assert driver.planner.deviation_gain == 0.3 and driver.planner.hold_gain == 0.2
-    assert driver.tracker.params.follow_safe_braking == 0.0  # the linear station-keeping rule by default
-    close = make_controller("mcts-lqng", close_following=True, lqng_horizon_steps=6)
-    assert isinstance(close, HierarchicalController) and isinstance(close.tracker, LQNGTracker)
-    assert close.tracker.params == dataclasses.replace(CLOSE_FOLLOWING_TRACKING, horizon=6)
+    assert driver.tracker.params == dataclasses.replace(CLOSE_FOLLOWING_TRACKING, horizon=6)  # close following
+    linear = make_controller("mcts-lqng", close_following=False, lqng_horizon_steps=6)
+    assert isinstance(linear, HierarchicalController) and isinstance(linear.tracker, LQNGTracker)
+    assert linear.tracker.params == dataclasses.replace(MCTS_TRACKING, horizon=6)
+    assert linear.tracker.params.follow_safe_braking == 0.0  # the linear station-keeping rule
     searched = make_controller("mcts-lqng", racing_line_default=False)
     assert isinstance(searched, HierarchicalController) and isinstance(searched.planner, MCTSPlanner)
     assert searched.planner.deviation_gain is None  # the search's lanes, as mcts-rl's by default
@@ -127,7 +128,7 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
 def test_defaults_build_the_tuned_drivers() -> None:
     default = make_controller("mcts-lqng")
     assert isinstance(default, HierarchicalController) and isinstance(default.tracker, LQNGTracker)
-    assert default.tracker.params == MCTS_TRACKING
+    assert default.tracker.params == CLOSE_FOLLOWING_TRACKING  # close following, since session 22
     assert isinstance(default.planner, MCTSPlanner) and default.planner.params == GameParams()
     assert (default.planner.iterations, default.planner.rate_hz) == (2000, 1.0)
     fixed = make_controller("fixed-lqng")
