@@ -15,8 +15,8 @@ The heading target points at a pure-pursuit aim point on the path that blends th
 into the next waypoints' lanes along the track (a heading straight at a lane point would cut the inside of
 bends). The tracker's acceleration and yaw rate are mapped to throttle and steer.
 
-The two registered hierarchical drivers track with the named presets :data:`MCTS_TRACKING` and
-:data:`FIXED_LINE_TRACKING`.
+The two registered hierarchical drivers track with the named presets :data:`CLOSE_FOLLOWING_TRACKING` (mcts-lqng;
+:data:`MCTS_TRACKING` with ``close_following=false``) and :data:`FIXED_LINE_TRACKING`.
 """
 
 from __future__ import annotations
@@ -134,6 +134,10 @@ class LQNGParams:
     alongside_clearance: float = 0.0
     alongside_reach: float = 2.5  # [m] a body length (2 m) and a margin
     alongside_push: float = 0.2  # [m]
+    # with the alongside discipline binding, drive no faster than the curves ahead allow on the widest line the
+    # discipline leaves (the racing line's speed there is for its own radius: on the inside of a hairpin the kart
+    # ran wide, into the kart beside it)
+    alongside_corner_speed: bool = False
     # on a straight with its lane changes spent (eq. (11) gen_lane_lim, counted as they happen), steer for no point
     # beyond the lanes the changes left reach, ``lane_guard_margin`` [m] short of the boundary: blending toward
     # the line and the next curve's lane otherwise crosses a boundary before the curve begins
@@ -157,7 +161,9 @@ class LQNGParams:
 # stayed in the other's wake, held back by station keeping (results/issue11/session18/README.md); so is one where the
 # kart ahead is predicted to leave the ego's lane (results/issue11/session20/README.md). With its lane changes
 # of a straight spent, it keeps within reach of its lanes until the curve: races from a spread start crossed into
-# the next curve's lane a few metres early, an illegal lane change (results/issue11/session19/README.md)
+# the next curve's lane a few metres early, an illegal lane change (results/issue11/session19/README.md). With a
+# kart alongside (within 2.5 m along the track) it steers for no offset nearer to it than 1.5 m, and a kart ahead
+# that will drift into its path within 0.4 s is kept station behind already (results/issue11/session22/README.md)
 MCTS_TRACKING = LQNGParams(
     speed_margin=3.0,
     traffic_lane_tolerance=1.25,
@@ -173,15 +179,17 @@ MCTS_TRACKING = LQNGParams(
     alongside_clearance=1.5,
     follow_predict_time=0.4,
 )
-# ``mcts-lqng`` with ``close_following``: station keeping by Gipps' safe speed (both braking at 6 m/s^2, this kart
-# after 0.05 s; a standoff of 2.3 m centre to centre on straights, 3.0 m in curves). It follows 3.0 m behind at
-# 14 m/s on a straight, where the linear rule holds 5.1 m, and dives inside at the straight's end: it passed a kart
-# 7% slower in 16 of 16 starts on complex (the linear rule 10) and 5% slower in 5 (3). Not the default: in the
-# paper's grid its collisions at fault rose from 0.15 to 0.25 per race, and from spread starts on complex-reversed
-# it got side by side in curves after a close run at them (results/issue11/session21/README.md)
+# ``mcts-lqng`` as registered (``close_following``, the default since session 22): station keeping by Gipps' safe
+# speed (both braking at 6 m/s^2, this kart after 0.05 s; a standoff of 2.3 m centre to centre on straights, 3.0 m
+# in curves). It follows 3.0 m behind at 14 m/s on a straight, where the linear rule holds 5.1 m, and dives inside
+# at the straight's end: it passed a kart 7% slower in 16 of 16 starts on complex (the linear rule 10) and 5%
+# slower in 5 (3) (results/issue11/session21/README.md). Session 21 kept it off by default: in the paper's grid its
+# collisions at fault rose from 0.15 to 0.25 per race, side by side in curves and behind karts drifting across.
+# The alongside discipline and the drift prediction of :data:`MCTS_TRACKING` took those away
+# (results/issue11/session22/README.md)
 CLOSE_FOLLOWING_HELP = (
-    "keep station by Gipps' safe speed, 2.3 m behind on straights and 3.0 m in curves (ours: passes slower karts "
-    "more often, and collides at fault more often, than the default spacing of 3 m + 0.15 s x speed)"
+    "keep station by Gipps' safe speed, 2.3 m behind on straights and 3.0 m in curves (ours; false: the linear "
+    "spacing of 3 m + 0.15 s x speed, which passes slower karts less often)"
 )
 CLOSE_FOLLOWING_TRACKING = replace(
     MCTS_TRACKING,
@@ -401,6 +409,26 @@ class LQNGTracker:
             return me.lateral, me.lateral
         return lowest, highest
 
+    def _held_line_speed(self, track: Track, kart: KartView, bounds: tuple[float, float], brake: float) -> float:
+        """Highest speed [m/s] from which the kart can brake (at ``braking_use`` of ``brake``) in time for each curve
+        in the next 12 m on the widest line ``bounds`` (lowest, highest offset) leave it: in a left-hander its radius
+        is the centre's minus the lowest offset, in a right-hander plus the highest (inf where the bound on the
+        outside is open)."""
+        assert self._context is not None
+        grip = float(self._context.kart.lateral_limit(kart.wear))
+        curvature = track.centre_curvature
+        limit = math.inf
+        for ahead in (0.0, 3.0, 6.0, 9.0, 12.0):
+            s = (kart.progress + ahead) % track.length
+            kappa = float(curvature[int(np.searchsorted(track.centre_s, s, side="right")) - 1])
+            outer = bounds[0] if kappa > 0.0 else -bounds[1]
+            if abs(kappa) < 1e-4 or not math.isfinite(outer):
+                continue
+            radius = max(1.0 / abs(kappa) - outer, 0.5)
+            corner = math.sqrt(grip * radius)
+            limit = min(limit, math.sqrt(corner**2 + 2.0 * brake * self.params.braking_use * ahead))
+        return limit
+
     def _safe_speed(self, room_ahead: float, other_speed: float) -> float:
         """Gipps' safe speed [m/s] behind a kart at ``other_speed`` with ``room_ahead`` m to spare beyond the
         standoff: the highest v with v * tau + v^2 / 2b <= room_ahead + other_speed^2 / 2b (tau: ``follow_time``,
@@ -444,9 +472,8 @@ class LQNGTracker:
             # positions relative to the ego kart keep the numbers small
             x0[STATE_SIZE * i : STATE_SIZE * i + 3] = (k.x - me.x, k.y - me.y, k.speed)
             first, second = self._upcoming(track, k, plan, k.index)
-            bounds = (
-                _within(self._lane_rule_bounds(track, k), self._alongside_bounds(track, k, others)) if i == 0 else None
-            )
+            discipline = self._alongside_bounds(track, k, others) if i == 0 else None
+            bounds = _within(self._lane_rule_bounds(track, k), discipline) if i == 0 else None
             ax, ay, aim_offset = self._aim(track, k, first, second, tolerance, bounds)
             heading_error = math.remainder(math.atan2(ay - k.y, ax - k.x) - k.heading, 2.0 * math.pi)
             speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
@@ -458,6 +485,8 @@ class LQNGTracker:
                     )
                     station = self._station_limit(me, others, aim_offset, straight, track)
                 speed = min(speed * self.params.speed_scale, station)
+                if discipline is not None and self.params.alongside_corner_speed:
+                    speed = min(speed, self._held_line_speed(track, me, discipline, kart.braking))
             targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))
         Q, q = self._costs(players, targets, plan)
         R = [w.control * np.eye(2) for _ in players]
