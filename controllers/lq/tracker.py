@@ -134,10 +134,6 @@ class LQNGParams:
     alongside_clearance: float = 0.0
     alongside_reach: float = 2.5  # [m] a body length (2 m) and a margin
     alongside_push: float = 0.2  # [m]
-    # with the alongside discipline binding, drive no faster than the curves ahead allow on the widest line the
-    # discipline leaves (the racing line's speed there is for its own radius: on the inside of a hairpin the kart
-    # ran wide, into the kart beside it)
-    alongside_corner_speed: bool = False
     # on a straight with its lane changes spent (eq. (11) gen_lane_lim, counted as they happen), steer for no point
     # beyond the lanes the changes left reach, ``lane_guard_margin`` [m] short of the boundary: blending toward
     # the line and the next curve's lane otherwise crosses a boundary before the curve begins
@@ -409,26 +405,6 @@ class LQNGTracker:
             return me.lateral, me.lateral
         return lowest, highest
 
-    def _held_line_speed(self, track: Track, kart: KartView, bounds: tuple[float, float], brake: float) -> float:
-        """Highest speed [m/s] from which the kart can brake (at ``braking_use`` of ``brake``) in time for each curve
-        in the next 12 m on the widest line ``bounds`` (lowest, highest offset) leave it: in a left-hander its radius
-        is the centre's minus the lowest offset, in a right-hander plus the highest (inf where the bound on the
-        outside is open)."""
-        assert self._context is not None
-        grip = float(self._context.kart.lateral_limit(kart.wear))
-        curvature = track.centre_curvature
-        limit = math.inf
-        for ahead in (0.0, 3.0, 6.0, 9.0, 12.0):
-            s = (kart.progress + ahead) % track.length
-            kappa = float(curvature[int(np.searchsorted(track.centre_s, s, side="right")) - 1])
-            outer = bounds[0] if kappa > 0.0 else -bounds[1]
-            if abs(kappa) < 1e-4 or not math.isfinite(outer):
-                continue
-            radius = max(1.0 / abs(kappa) - outer, 0.5)
-            corner = math.sqrt(grip * radius)
-            limit = min(limit, math.sqrt(corner**2 + 2.0 * brake * self.params.braking_use * ahead))
-        return limit
-
     def _safe_speed(self, room_ahead: float, other_speed: float) -> float:
         """Gipps' safe speed [m/s] behind a kart at ``other_speed`` with ``room_ahead`` m to spare beyond the
         standoff: the highest v with v * tau + v^2 / 2b <= room_ahead + other_speed^2 / 2b (tau: ``follow_time``,
@@ -485,8 +461,6 @@ class LQNGTracker:
                     )
                     station = self._station_limit(me, others, aim_offset, straight, track)
                 speed = min(speed * self.params.speed_scale, station)
-                if discipline is not None and self.params.alongside_corner_speed:
-                    speed = min(speed, self._held_line_speed(track, me, discipline, kart.braking))
             targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))
         Q, q = self._costs(players, targets, plan)
         R = [w.control * np.eye(2) for _ in players]
