@@ -370,11 +370,13 @@ class LQNGTracker:
             dx, dy = other.x - kart.x, other.y - kart.y
             ahead = dx * cos_h + dy * sin_h
             aside = -dx * sin_h + dy * cos_h
+            if ahead <= p.follow_min_ahead:
+                continue
             in_path = abs(aside) < p.follow_band or abs(other.lateral - aim_offset) < p.follow_path_band
             if not in_path and track is not None and p.follow_predict_time > 0.0:
                 drift = (_rate_across(track, other) - _rate_across(track, kart)) * p.follow_predict_time
                 in_path = aside * (aside + drift) <= 0.0 or abs(aside + drift) < p.follow_band  # within band by then
-            if ahead <= p.follow_min_ahead or not in_path:
+            if not in_path:
                 continue
             if p.follow_safe_braking > 0.0:
                 standoff = p.follow_distance if straight or p.follow_distance_curve <= 0.0 else p.follow_distance_curve
