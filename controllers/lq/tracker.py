@@ -366,6 +366,7 @@ class LQNGTracker:
         p = self.params
         limit = math.inf
         cos_h, sin_h = math.cos(kart.heading), math.sin(kart.heading)
+        my_rate: float | None = None  # across the track, looked up once and only if a drift is predicted
         for other in others:
             dx, dy = other.x - kart.x, other.y - kart.y
             ahead = dx * cos_h + dy * sin_h
@@ -374,7 +375,9 @@ class LQNGTracker:
                 continue
             in_path = abs(aside) < p.follow_band or abs(other.lateral - aim_offset) < p.follow_path_band
             if not in_path and track is not None and p.follow_predict_time > 0.0:
-                drift = (_rate_across(track, other) - _rate_across(track, kart)) * p.follow_predict_time
+                if my_rate is None:
+                    my_rate = _rate_across(track, kart)
+                drift = (_rate_across(track, other) - my_rate) * p.follow_predict_time
                 in_path = aside * (aside + drift) <= 0.0 or abs(aside + drift) < p.follow_band  # within band by then
             if not in_path:
                 continue
@@ -450,8 +453,9 @@ class LQNGTracker:
             # positions relative to the ego kart keep the numbers small
             x0[STATE_SIZE * i : STATE_SIZE * i + 3] = (k.x - me.x, k.y - me.y, k.speed)
             first, second = self._upcoming(track, k, plan, k.index)
-            discipline = self._alongside_bounds(track, k, others) if i == 0 else None
-            bounds = _within(self._lane_rule_bounds(track, k), discipline) if i == 0 else None
+            bounds = (
+                _within(self._lane_rule_bounds(track, k), self._alongside_bounds(track, k, others)) if i == 0 else None
+            )
             ax, ay, aim_offset = self._aim(track, k, first, second, tolerance, bounds)
             heading_error = math.remainder(math.atan2(ay - k.y, ax - k.x) - k.heading, 2.0 * math.pi)
             speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
