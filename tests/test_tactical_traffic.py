@@ -207,3 +207,14 @@ def test_it_keeps_station_behind_a_kart_drifting_into_its_path() -> None:
     spec = RaceSpec(track="oval", controllers=("mcts-lqng", "e2e"), seed=2, start_lanes=(2, 3))
     assert _race_with_tracker(spec, "e2e")[0] == 0
     assert _race_with_tracker(spec, "e2e", follow_predict_time=0.0)[0] == 1
+
+
+def test_it_yields_to_a_faster_kart_cutting_across_from_alongside() -> None:
+    """A lane-3 start on complex against fixed-rl (seed 1): on its second lap fixed-rl passed mcts-lqng round the
+    outside of the curve after the second hairpin, 3.7 m/s faster, and cut in 2.2 m ahead of it: a collision at
+    fault by the follower (18 of mcts-lqng's 22 in session 22's paper grid were this). Braking at once for a kart
+    2 m/s faster that is alongside and will be in its path within 0.4 s, it lets it in; without that it still
+    collides."""
+    spec = RaceSpec(track="complex", controllers=("mcts-lqng", "fixed-rl"), seed=1, start_lanes=(3, 2))
+    assert _race_with_tracker(spec, "fixed-rl")[0] == 0
+    assert _race_with_tracker(spec, "fixed-rl", yield_speed_margin=0.0)[0] == 1

@@ -126,6 +126,13 @@ class LQNGParams:
     # drifting over in front is braked for before it is there (following 1.7 m behind a kart 1.5 m aside, close
     # following was hit by it as it drifted across, a collision at fault by the follower); 0: off
     follow_predict_time: float = 0.0
+    # [m/s] > 0: let a passing kart in. One at least this much faster, alongside (within ``alongside_reach``) or
+    # less than ``follow_distance`` ahead, that the two karts' rates across the track bring within ``follow_band``
+    # sideways within ``follow_predict_time``, is braked for at once: the speed limit is ``yield_drop`` under the
+    # kart's own (full braking through ``follow_brake_gain``). Such a kart cuts in a body length ahead, and the
+    # contact is the follower's fault; station keeping starts only once it is ahead, too late; 0: off
+    yield_speed_margin: float = 0.0
+    yield_drop: float = 0.6  # [m/s]
     # [m] > 0: alongside discipline. With another kart alongside (centres closer than ``alongside_reach`` along the
     # track), steer for no offset nearer to it sideways than this (centre to centre), and where the two are
     # already closer, for one no nearer than the present offset plus ``alongside_push``: the kart that moves
@@ -159,7 +166,9 @@ class LQNGParams:
 # of a straight spent, it keeps within reach of its lanes until the curve: races from a spread start crossed into
 # the next curve's lane a few metres early, an illegal lane change (results/issue11/session19/README.md). With a
 # kart alongside (within 2.5 m along the track) it steers for no offset nearer to it than 1.5 m, and a kart ahead
-# that will drift into its path within 0.4 s is kept station behind already (results/issue11/session22/README.md)
+# that will drift into its path within 0.4 s is kept station behind already (results/issue11/session22/README.md).
+# A kart 2 m/s or more faster, alongside or less than the standoff ahead, that will be in its path within 0.4 s is
+# let in: it brakes at once (results/issue11/session23/README.md)
 MCTS_TRACKING = LQNGParams(
     speed_margin=3.0,
     traffic_lane_tolerance=1.25,
@@ -174,6 +183,7 @@ MCTS_TRACKING = LQNGParams(
     lane_rule_guard=True,
     alongside_clearance=1.5,
     follow_predict_time=0.4,
+    yield_speed_margin=2.0,
 )
 # ``mcts-lqng`` as registered (``close_following``, the default since session 22): station keeping by Gipps' safe
 # speed (both braking at 6 m/s^2, this kart after 0.05 s; a standoff of 2.3 m centre to centre on straights, 3.0 m
@@ -359,26 +369,45 @@ class LQNGTracker:
         """Highest speed [m/s] that keeps station behind the nearest kart ahead in ``kart``'s path (inf: none):
         within ``follow_band`` of it sideways, or within ``follow_path_band`` of ``aim_offset``, the lateral offset
         it steers for (a kart pulling out to pass leaves the other behind it; one cutting in behind does not); with
-        ``follow_predict_time`` and the ``track``, also one that drifts that close within that time.
+        ``follow_predict_time`` and the ``track``, also one that drifts that close within that time. With
+        ``yield_speed_margin`` as well, a faster kart cutting across from alongside caps it under its own speed
+        (it brakes to let that kart in).
 
         Ahead and aside are measured in the kart's own heading frame (in a hairpin the centre line's progress
         says little about the distance between two karts)."""
         p = self.params
         limit = math.inf
         cos_h, sin_h = math.cos(kart.heading), math.sin(kart.heading)
+        predict = track is not None and p.follow_predict_time > 0.0
         my_rate: float | None = None  # across the track, looked up once and only if a drift is predicted
+
+        def drifts_into_path(other: KartView, aside: float) -> bool:
+            """Whether the two karts' rates across the track take ``other`` (``aside`` m to the side) across the
+            kart's line or within ``follow_band`` of it within ``follow_predict_time``."""
+            nonlocal my_rate
+            assert track is not None
+            if my_rate is None:
+                my_rate = _rate_across(track, kart)
+            then = aside + (_rate_across(track, other) - my_rate) * p.follow_predict_time
+            return aside * then <= 0.0 or abs(then) < p.follow_band
+
         for other in others:
             dx, dy = other.x - kart.x, other.y - kart.y
             ahead = dx * cos_h + dy * sin_h
             aside = -dx * sin_h + dy * cos_h
+            if (
+                predict
+                and p.yield_speed_margin > 0.0
+                and other.speed > kart.speed + p.yield_speed_margin
+                and -p.alongside_reach < ahead < p.follow_distance
+                and drifts_into_path(other, aside)
+            ):
+                limit = min(limit, max(kart.speed - p.yield_drop, 0.0))
             if ahead <= p.follow_min_ahead:
                 continue
             in_path = abs(aside) < p.follow_band or abs(other.lateral - aim_offset) < p.follow_path_band
-            if not in_path and track is not None and p.follow_predict_time > 0.0:
-                if my_rate is None:
-                    my_rate = _rate_across(track, kart)
-                drift = (_rate_across(track, other) - my_rate) * p.follow_predict_time
-                in_path = aside * (aside + drift) <= 0.0 or abs(aside + drift) < p.follow_band  # within band by then
+            if not in_path and predict:
+                in_path = drifts_into_path(other, aside)
             if not in_path:
                 continue
             if p.follow_safe_braking > 0.0:

@@ -141,6 +141,37 @@ def _on_oval(index: int, progress: float, lateral: float, passed: int, speed: fl
     return KartView(index, x, y, heading, speed, progress, lateral, 0.25, passed, 2, 0, 0.0, speed, 0.25, False)
 
 
+def test_it_yields_to_a_faster_kart_cutting_across_from_alongside() -> None:
+    """mcts-lqng's tracker brakes at once (a limit 0.6 m/s under its own speed) for a kart 2 m/s or more faster,
+    alongside or less than the 2.3 m standoff ahead, that will be within 1.0 m sideways within 0.4 s: 2.0 m to its
+    left and 0.5 m ahead at 12 m/s, heading 15 degrees across toward it (3.1 m/s sideways, 1.24 m in 0.4 s). Not
+    when that kart holds its line, is not faster by the margin, is further back than the alongside reach, or with
+    the rule off. (On complex, fixed-rl passed this way at 11-12 m/s against 8 and cut in 2.2 m ahead: a collision
+    at fault by the follower in half of mcts-lqng's lane-3 starts.)"""
+    track = get_track("oval")
+    params = CLOSE_FOLLOWING_TRACKING
+    assert (params.yield_speed_margin, params.yield_drop, params.follow_predict_time) == (2.0, 0.6, 0.4)
+    straight = 11  # the oval's back straight runs from checkpoint 10 to 16
+    s = float(track.checkpoint_s[straight]) + 5.0
+    me = _on_oval(0, s, 0.0, straight, speed=9.0)
+    across = math.radians(15.0)
+
+    def limit(other: KartView, tracker_params: LQNGParams = params) -> float:
+        tracker = LQNGTracker(tracker_params)
+        return tracker._station_limit(me, [other], aim_offset=0.0, straight=True, track=track)
+
+    cutting_in = _on_oval(1, s + 0.5, 2.0, straight, speed=12.0)
+    cutting_in = replace(cutting_in, heading=cutting_in.heading - across)
+    assert limit(cutting_in) == pytest.approx(9.0 - 0.6)
+    holding_its_line = _on_oval(1, s + 0.5, 2.0, straight, speed=12.0)
+    assert limit(holding_its_line) == math.inf
+    not_faster_enough = replace(cutting_in, speed=10.5)
+    assert limit(not_faster_enough) == math.inf
+    behind = _on_oval(1, s - 3.0, 2.0, straight, speed=12.0)
+    assert limit(replace(behind, heading=behind.heading - across)) == math.inf
+    assert limit(cutting_in, replace(params, yield_speed_margin=0.0)) == math.inf
+
+
 def test_a_pass_planned_on_a_straight_is_driven_in_its_lane() -> None:
     """mcts-lqng's tracker drives its planned lanes exactly (no blending toward the line) while passing: on a
     straight, behind a kart within ``pass_distance`` that drives under the racing line's speed there, with the next
