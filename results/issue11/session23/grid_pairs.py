@@ -1,15 +1,23 @@
 """The paper grid's races that one agent drives (session 22's tournament: five agents, oval and complex, 50 races
 per pair, seed 0), run in parallel without the database: one line per race, then per-opponent wins and the agent's
 collisions at fault. The races are the tournament's own jobs (same seeds, lanes and background planners), so the
-lines compare race by race with any grid run from the same code. argv: [workers] [agent].
+lines compare race by race with any grid run from the same code. argv: [workers] [agent]. Environment: TRACKER, a
+JSON object of ``LQNGParams`` fields set on mcts-lqng's registered tracker preset; ONLY, the pairings to run as
+track:opponent, comma separated (default: all).
 
     PYTHONPATH=$PWD .venv/bin/python results/issue11/session23/grid_pairs.py 2 mcts-lqng
+    TRACKER='{"yield_speed_margin": 1.0}' ONLY=complex:fixed-rl,complex:e2e \
+        PYTHONPATH=$PWD .venv/bin/python results/issue11/session23/grid_pairs.py 2 mcts-lqng
 """
 
+import json
+import os
 import sys
 from collections import defaultdict
+from dataclasses import replace
 from multiprocessing import Pool
 
+import controllers.registry as registry
 from arena.race import RaceJob, run_job
 from arena.tournament import TournamentSpec
 
@@ -26,7 +34,14 @@ def race(job: RaceJob) -> tuple[RaceJob, list[tuple[float | None, int, int, int]
 def main() -> None:
     workers = int(sys.argv[1]) if len(sys.argv) > 1 else 2
     agent = sys.argv[2] if len(sys.argv) > 2 else "mcts-lqng"
+    overrides = json.loads(os.environ.get("TRACKER", "{}"))
+    if overrides:  # the workers are forked after this, with the presets changed
+        registry.CLOSE_FOLLOWING_TRACKING = replace(registry.CLOSE_FOLLOWING_TRACKING, **overrides)
+        registry.MCTS_TRACKING = replace(registry.MCTS_TRACKING, **overrides)
+    only = {tuple(x.split(":")) for x in os.environ["ONLY"].split(",")} if os.environ.get("ONLY") else None
     jobs = [j for j in TournamentSpec(agents=AGENTS, races_per_pair=50, seed=0).jobs() if agent in j.agents]
+    if only is not None:
+        jobs = [j for j in jobs if (j.track, next(a for a in j.agents if a != agent)) in only]
     tally: dict[tuple[str, str], list[int]] = defaultdict(lambda: [0, 0, 0, 0])  # wins, races, faults, illegal
     with Pool(workers) as pool:
         for job, karts, first in pool.imap(race, jobs, chunksize=1):
