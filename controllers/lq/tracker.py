@@ -129,8 +129,9 @@ class LQNGParams:
     # [m/s] > 0: let a passing kart in. One at least this much faster, alongside (within ``alongside_reach``) or
     # less than ``follow_distance`` ahead, that the two karts' rates across the track bring within ``follow_band``
     # sideways within ``follow_predict_time``, is braked for at once: the speed limit is ``yield_drop`` under the
-    # kart's own (full braking through ``follow_brake_gain``). Such a kart cuts in a body length ahead, and the
-    # contact is the follower's fault; station keeping starts only once it is ahead, too late; 0: off
+    # kart's own, so it brakes at ``follow_brake_gain`` x ``yield_drop`` (6 m/s^2, full braking, when following
+    # closely). Such a kart cuts in a body length ahead, and the contact is the follower's fault; station keeping
+    # starts only once it is ahead, too late; 0: off
     yield_speed_margin: float = 0.0
     yield_drop: float = 0.6  # [m/s]
     # [m] > 0: alongside discipline. With another kart alongside (centres closer than ``alongside_reach`` along the
