@@ -52,6 +52,7 @@ from controllers.lq.tracker import (
     CLOSE_FOLLOWING_HELP,
     CLOSE_FOLLOWING_TRACKING,
     FIXED_LINE_TRACKING,
+    GRIP_STEER_HELP,
     MCTS_TRACKING,
     LQNGTracker,
 )
@@ -127,6 +128,7 @@ class MCTSLQNGParams:
     pace_model: bool = parameter(True, PACE_MODEL_HELP)
     own_pace: float = parameter(1.0, OWN_PACE_HELP, minimum=0.8, maximum=1.3)
     close_following: bool = parameter(True, CLOSE_FOLLOWING_HELP)
+    grip_steer: float = parameter(0.0, GRIP_STEER_HELP, minimum=0.0, maximum=1.0)
 
 
 @dataclass(frozen=True)
@@ -148,7 +150,7 @@ class FixedLQNGParams:
 def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
     planner = MCTSPlanner.from_settings(params, hold_gain=params.hold_gain_s)
     tracking = CLOSE_FOLLOWING_TRACKING if params.close_following else MCTS_TRACKING
-    tracker = LQNGTracker(replace(tracking, horizon=params.lqng_horizon_steps))
+    tracker = LQNGTracker(replace(tracking, horizon=params.lqng_horizon_steps, grip_steer=params.grip_steer))
     return HierarchicalController("mcts-lqng", planner, tracker)
 
 

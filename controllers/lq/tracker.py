@@ -31,7 +31,7 @@ from controllers.lq.game import STATE_SIZE, add_denial_cost, add_separation_cost
 from controllers.lq.nash import feedback_nash
 from controllers.plan import Plan, Waypoint
 from controllers.racing_line import RacingLine, optimise_racing_line
-from sim_core.kart import throttle_for_acceleration
+from sim_core.kart import lateral_limit, throttle_for_acceleration
 from sim_core.observation import KartView, Observation
 from sim_core.params import DT
 from sim_core.track import Track
@@ -102,6 +102,12 @@ class LQNGParams:
     # [1/s] the steering input changes at most this fast (lock to lock in 2/rate s); 0: unlimited. A full-lock
     # zig-zag between planned lanes is what traction control turns into braking
     steer_rate: float = 0.0
+    # > 0: the steer asks for at most this fraction of the curvature the tyres hold at the kart's speed and wear;
+    # 0: off. Past it traction control brakes at the full braking limit (a 2.5 m lane change in a 9 m section
+    # after a hairpin took a following kart from 10 to 5.9 m/s), where a driver eases the change and keeps speed.
+    # Not with a kart alongside (within ``alongside_distance``): there steering and braking together keep clear
+    grip_steer: float = 0.0
+    grip_steer_clearance: float = 2.0  # [m] sideways: a kart alongside closer than this lifts the limit
     # keeping station behind a kart ahead (centres within ``follow_band`` laterally): at most its speed plus
     # ``follow_gain`` times the gap beyond ``follow_distance`` + ``follow_time`` * speed (or Gipps' safe speed,
     # ``follow_safe_braking`` below); 0 gain: off
@@ -197,6 +203,12 @@ MCTS_TRACKING = LQNGParams(
 CLOSE_FOLLOWING_HELP = (
     "keep station by Gipps' safe speed, 2.3 m behind on straights and 3.0 m in curves (ours; false: the linear "
     "spacing of 3 m + 0.15 s x speed, which passes slower karts less often)"
+)
+# off by default: in session 24's measurements (results/issue11/session24/README.md) it passed karts 3-5% slower
+# far more often, but lost the paper grid's complex races against e2e (42 of 50 won without it, 2 with it)
+GRIP_STEER_HELP = (
+    "fraction of the tyres' grip the tracker's steering may ask for with no kart close alongside (0: off, "
+    "traction control brakes whenever it asks for more); 0.98 passes slower karts far more often"
 )
 CLOSE_FOLLOWING_TRACKING = replace(
     MCTS_TRACKING,
@@ -508,11 +520,34 @@ class LQNGTracker:
         throttle = throttle_for_acceleration(self._kart_vector, me.speed, float(accel))
         speed = max(abs(me.speed), 1.0)
         steer = float(np.clip(math.atan(yaw_rate * kart.wheelbase / speed) / kart.max_steer_angle, -1.0, 1.0))
+        if self.params.grip_steer > 0.0 and not self._beside(track, me, others):
+            steer = min(max(steer, -self._grip_steer(me)), self._grip_steer(me))
         if self.params.steer_rate > 0.0:
             step = self.params.steer_rate * DT
             steer = min(max(steer, self._steer - step), self._steer + step)
         self._steer = steer
         return Action(steer, float(np.clip(throttle, -1.0, 1.0)))
+
+    def _beside(self, track: Track, me: KartView, others: list[KartView]) -> bool:
+        """Whether a kart is alongside ``me`` (within ``alongside_distance`` along the track) and within
+        ``grip_steer_clearance`` sideways."""
+        p = self.params
+        return any(
+            abs(track.gap(me.progress, k.progress)) < p.alongside_distance
+            and abs(k.lateral - me.lateral) < p.grip_steer_clearance
+            for k in others
+        )
+
+    def _grip_steer(self, me: KartView) -> float:
+        """The steer input [-1, 1] whose path curvature (the kart model's bicycle,
+        :func:`sim_core.kart.kart_step`) is ``grip_steer`` of what the tyres hold at ``me``'s speed and wear."""
+        assert self._context is not None
+        kart = self._context.kart
+        speed = max(abs(me.speed), 1e-3)
+        curvature = self.params.grip_steer * lateral_limit(self._kart_vector, me.wear) / (speed * speed)
+        sin_beta = min(0.5 * kart.wheelbase * curvature, 0.999)
+        tan_delta = 2.0 * sin_beta / math.sqrt(1.0 - sin_beta * sin_beta)
+        return min(math.atan(tan_delta) / kart.max_steer_angle, 1.0)
 
     def _costs(
         self, players: list[KartView], targets: list[tuple[float, float, float, float]], plan: Plan | None

@@ -16,6 +16,7 @@ from controllers.lq.tracker import CLOSE_FOLLOWING_TRACKING, MCTS_TRACKING, LQNG
 from controllers.plan import Plan, Waypoint
 from controllers.race import RaceSpec, run_race
 from controllers.registry import make_controller
+from sim_core.kart import kart_step, lateral_limit, yaw_for_wear
 from sim_core.observation import KartView, Observation, observe
 from sim_core.params import DT, PAPER_KART
 from sim_core.track_io import get_track
@@ -313,3 +314,63 @@ def test_alongside_it_steers_for_no_offset_nearer_the_other_kart_than_the_cleara
     assert _within((0.0, 2.0), (0.5, math.inf)) == (0.5, 2.0)
     assert _within((0.0, 2.0), (2.5, math.inf)) == (0.0, 2.0)  # the lane rule's alone
     assert _within(None, (0.5, math.inf)) == (0.5, math.inf) and _within((0.0, 2.0), None) == (0.0, 2.0)
+
+
+def test_grip_steer_asks_for_no_more_curvature_than_the_tyres_hold() -> None:
+    """``grip_steer``: the steer limit is the kart model's own (the bicycle's curvature 2 sin(beta) / wheelbase with
+    tan(beta) = tan(delta) / 2) at the given fraction of the lateral limit: at 12 m/s and wear 0.25, driven through
+    :func:`sim_core.kart.kart_step`, the limit at 1.0 steers without losing speed to traction control, and 5% more
+    steer brakes at the full braking limit. Hand check of 0.98: the path curvature is 0.98 a_lat / v^2."""
+    track = get_track("oval")
+    me = _on_oval(0, float(track.checkpoint_s[11]) + 2.0, 0.0, 11, speed=12.0)
+
+    def limit(fraction: float) -> float:
+        tracker = LQNGTracker(replace(CLOSE_FOLLOWING_TRACKING, grip_steer=fraction))
+        tracker.reset(RaceContext(track, PAPER_KART, 0, 2, track.lane_change_limit, 0))
+        return tracker._grip_steer(me)
+
+    p = PAPER_KART.as_array()
+    a_lat = lateral_limit(p, me.wear)
+    tan_beta = 0.5 * math.tan(limit(0.98) * PAPER_KART.max_steer_angle)
+    curvature = 2.0 * tan_beta / math.sqrt(1.0 + tan_beta**2) / PAPER_KART.wheelbase
+    assert curvature == pytest.approx(0.98 * a_lat / 12.0**2, rel=1e-9)
+    yaw = yaw_for_wear(p, me.wear)
+
+    def speed_after(steer: float) -> float:
+        return kart_step(p, 0.0, 0.0, 0.0, 12.0, 0.0, yaw, steer, 0.0, DT)[3]
+
+    assert speed_after(0.999 * limit(1.0)) == pytest.approx(speed_after(0.0), abs=1e-12)  # coasting only
+    assert speed_after(1.05 * limit(1.0)) < speed_after(0.0) - 0.5 * PAPER_KART.braking * DT  # traction control
+
+
+def test_grip_steer_is_lifted_with_a_kart_close_alongside_and_limits_the_steer_otherwise() -> None:
+    """With ``grip_steer`` the tracker's steer stays within the limit when it is sent two lanes across at once
+    (on the oval's back straight at 14 m/s, the plan's next waypoint in lane 4 from lane 2), and the limit is
+    lifted while a kart is alongside (within ``alongside_distance`` along the track) and less than
+    ``grip_steer_clearance`` sideways: steering and braking together keep the two apart there (a kart squeezed on
+    the inside of complex's first corner ran into the one beside it, a collision at fault, when held to the
+    limit). Without the option the same tracker asks for more."""
+    track = get_track("oval")
+    straight = 11
+    s = float(track.checkpoint_s[straight]) + 1.0
+    me = _on_oval(0, s, 1.25, straight)
+    point = track.lane_point(straight + 1, 4)
+    waypoint = Waypoint(straight + 1, 4, (float(point[0]), float(point[1])), 15.0, 0.0)
+    plan = Plan(0, straight, {0: (waypoint,)}, 1, 1, 0.0)
+
+    def steer(fraction: float, *others: KartView) -> tuple[float, float]:
+        tracker = LQNGTracker(replace(CLOSE_FOLLOWING_TRACKING, grip_steer=fraction, steer_rate=0.0))
+        tracker.reset(RaceContext(track, PAPER_KART, 0, 2, track.lane_change_limit, 0))
+        observation = Observation(0.0, 0, (me, *others), np.full(9, 20.0), np.zeros(9, dtype=np.int64))
+        return abs(tracker.act(observation, plan).steer), tracker._grip_steer(me)
+
+    free, limit = steer(0.98)
+    unlimited, _ = steer(0.0)
+    assert unlimited > limit and free == pytest.approx(limit)
+    beside = _on_oval(1, s + 0.5, 2.75, straight)  # 1.5 m to its left
+    assert steer(0.98, beside)[0] > limit
+    wide = _on_oval(1, s + 0.5, 3.75, straight)  # 2.5 m to its left: the limit holds
+    assert steer(0.98, wide)[0] == pytest.approx(limit)
+    tracker = LQNGTracker(replace(CLOSE_FOLLOWING_TRACKING, grip_steer=0.98))
+    assert tracker._beside(track, me, [beside]) and not tracker._beside(track, me, [wide])
+    assert not tracker._beside(track, me, [_on_oval(1, s + 6.0, 2.75, straight)])  # ahead, not alongside

@@ -60,6 +60,7 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
         "pace_model": "True",
         "own_pace": "1.0",
         "close_following": "True",
+        "grip_steer": "0.0",
     }
     assert dict(REGISTRY["fixed-lqng"].parameters) == {
         "line_margin_m": "1.0",
@@ -89,6 +90,9 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
     assert isinstance(linear, HierarchicalController) and isinstance(linear.tracker, LQNGTracker)
     assert linear.tracker.params == dataclasses.replace(MCTS_TRACKING, horizon=6)
     assert linear.tracker.params.follow_safe_braking == 0.0  # the linear station-keeping rule
+    gripping = make_controller("mcts-lqng", grip_steer=0.98)
+    assert isinstance(gripping, HierarchicalController) and isinstance(gripping.tracker, LQNGTracker)
+    assert gripping.tracker.params == dataclasses.replace(CLOSE_FOLLOWING_TRACKING, grip_steer=0.98)
     searched = make_controller("mcts-lqng", racing_line_default=False)
     assert isinstance(searched, HierarchicalController) and isinstance(searched.planner, MCTSPlanner)
     assert searched.planner.deviation_gain is None  # the search's lanes, as mcts-rl's by default

@@ -1,0 +1,46 @@
+"""Session 22's pass threshold (``../session22/pass_threshold.py``: mcts-lqng from lane 2 of `complex` against
+fixed-lqng at a fraction ``speed_scale`` of its speed targets, seeds 0, 2, 4, ...) with mcts-lqng's tracker
+presets changed by TRACKER, a JSON object of ``LQNGParams`` fields (default: as shipped), and the setting's name
+in each line taken from LABEL.
+
+    TRACKER='{"grip_steer": 0.98}' LABEL=grip PYTHONPATH=$PWD .venv/bin/python \\
+        results/issue11/session24/pass_threshold.py --starts 16 --workers 2
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+from dataclasses import replace
+from pathlib import Path
+
+import typer
+
+import controllers.registry as registry
+
+overrides = json.loads(os.environ.get("TRACKER", "{}"))
+if overrides:  # before the workers fork
+    registry.CLOSE_FOLLOWING_TRACKING = replace(registry.CLOSE_FOLLOWING_TRACKING, **overrides)
+    registry.MCTS_TRACKING = replace(registry.MCTS_TRACKING, **overrides)
+
+_path = Path(__file__).parents[1] / "session20" / "pass_threshold.py"
+_spec = importlib.util.spec_from_file_location("session20", _path)
+assert _spec is not None and _spec.loader is not None
+session20 = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(session20)
+_session20_race = session20.race
+LABEL = os.environ.get("LABEL", "shipped")
+
+
+def race(track: str, setting: str, scale: float, seed: int) -> dict[str, object]:
+    """Session 20's race with mcts-lqng as registered (presets changed as above)."""
+    return _session20_race(track, "shipped", scale, seed) | {"setting": setting}  # type: ignore[no-any-return]
+
+
+session20.race = race
+session20.SETTINGS = (LABEL,)
+session20.SCALES = (1.0, 0.98, 0.97, 0.95, 0.93)
+
+if __name__ == "__main__":
+    typer.run(session20.main)
