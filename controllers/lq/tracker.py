@@ -521,7 +521,8 @@ class LQNGTracker:
         speed = max(abs(me.speed), 1.0)
         steer = float(np.clip(math.atan(yaw_rate * kart.wheelbase / speed) / kart.max_steer_angle, -1.0, 1.0))
         if self.params.grip_steer > 0.0 and not self._beside(track, me, others):
-            steer = min(max(steer, -self._grip_steer(me)), self._grip_steer(me))
+            held = self._grip_steer(me)
+            steer = min(max(steer, -held), held)
         if self.params.steer_rate > 0.0:
             step = self.params.steer_rate * DT
             steer = min(max(steer, self._steer - step), self._steer + step)
