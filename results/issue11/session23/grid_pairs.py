@@ -16,6 +16,7 @@ import sys
 from collections import defaultdict
 from dataclasses import replace
 from multiprocessing import Pool
+from pathlib import Path
 
 import controllers.registry as registry
 from arena.race import RaceJob, run_job
@@ -38,6 +39,11 @@ def main() -> None:
     if overrides:  # the workers are forked after this, with the presets changed
         registry.CLOSE_FOLLOWING_TRACKING = replace(registry.CLOSE_FOLLOWING_TRACKING, **overrides)
         registry.MCTS_TRACKING = replace(registry.MCTS_TRACKING, **overrides)
+        # since session 24 the registry's parameter grip_steer is written over the preset: set it on the tracker
+        sys.path.insert(0, str(Path(__file__).parents[1] / "session24"))
+        import tracker_env
+
+        tracker_env.apply()
     only = {tuple(x.split(":")) for x in os.environ["ONLY"].split(",")} if os.environ.get("ONLY") else None
     jobs = [j for j in TournamentSpec(agents=AGENTS, races_per_pair=50, seed=0).jobs() if agent in j.agents]
     if only is not None:

@@ -1,7 +1,7 @@
 """Session 22's pass threshold (``../session22/pass_threshold.py``: mcts-lqng from lane 2 of `complex` against
 fixed-lqng at a fraction ``speed_scale`` of its speed targets, seeds 0, 2, 4, ...) with mcts-lqng's tracker
-presets changed by TRACKER, a JSON object of ``LQNGParams`` fields (default: as shipped), and the setting's name
-in each line taken from LABEL.
+settings changed by TRACKER, a JSON object of ``LQNGParams`` fields (``tracker_env.py``; default: as shipped),
+and the setting's name in each line taken from LABEL.
 
     TRACKER='{"grip_steer": 0.98}' LABEL=grip PYTHONPATH=$PWD .venv/bin/python \\
         results/issue11/session24/pass_threshold.py --starts 16 --workers 2
@@ -10,19 +10,16 @@ in each line taken from LABEL.
 from __future__ import annotations
 
 import importlib.util
-import json
 import os
-from dataclasses import replace
+import sys
 from pathlib import Path
 
 import typer
 
-import controllers.registry as registry
+sys.path.insert(0, str(Path(__file__).parent))
+import tracker_env
 
-overrides = json.loads(os.environ.get("TRACKER", "{}"))
-if overrides:  # before the workers fork
-    registry.CLOSE_FOLLOWING_TRACKING = replace(registry.CLOSE_FOLLOWING_TRACKING, **overrides)
-    registry.MCTS_TRACKING = replace(registry.MCTS_TRACKING, **overrides)
+tracker_env.apply()  # before the workers fork
 
 _path = Path(__file__).parents[1] / "session22" / "pass_threshold.py"
 _spec = importlib.util.spec_from_file_location("session22", _path)
