@@ -10,15 +10,12 @@ track:opponent, comma separated (default: all).
         PYTHONPATH=$PWD .venv/bin/python results/issue11/session23/grid_pairs.py 2 mcts-lqng
 """
 
-import json
 import os
 import sys
 from collections import defaultdict
-from dataclasses import replace
 from multiprocessing import Pool
 from pathlib import Path
 
-import controllers.registry as registry
 from arena.race import RaceJob, run_job
 from arena.tournament import TournamentSpec
 
@@ -35,15 +32,12 @@ def race(job: RaceJob) -> tuple[RaceJob, list[tuple[float | None, int, int, int]
 def main() -> None:
     workers = int(sys.argv[1]) if len(sys.argv) > 1 else 2
     agent = sys.argv[2] if len(sys.argv) > 2 else "mcts-lqng"
-    overrides = json.loads(os.environ.get("TRACKER", "{}"))
-    if overrides:  # the workers are forked after this, with the presets changed
-        registry.CLOSE_FOLLOWING_TRACKING = replace(registry.CLOSE_FOLLOWING_TRACKING, **overrides)
-        registry.MCTS_TRACKING = replace(registry.MCTS_TRACKING, **overrides)
-        # since session 24 the registry's parameter grip_steer is written over the preset: set it on the tracker
-        sys.path.insert(0, str(Path(__file__).parents[1] / "session24"))
-        import tracker_env
+    # TRACKER's fields are set on every mcts-lqng tracker built (the workers are forked after this); since session
+    # 24 the registry's parameter grip_steer would write over a changed preset
+    sys.path.insert(0, str(Path(__file__).parents[1] / "session24"))
+    import tracker_env
 
-        tracker_env.apply()
+    tracker_env.apply()
     only = {tuple(x.split(":")) for x in os.environ["ONLY"].split(",")} if os.environ.get("ONLY") else None
     jobs = [j for j in TournamentSpec(agents=AGENTS, races_per_pair=50, seed=0).jobs() if agent in j.agents]
     if only is not None:
