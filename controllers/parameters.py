@@ -63,6 +63,10 @@ class ParameterError(ValueError):
         self.parameter = parameter
         self.reason = reason
 
+    def __reduce__(self) -> tuple[type[ParameterError], tuple[str, str, str]]:
+        # pickled with its fields, not its message: a race's worker process sends the error back to the runner
+        return (type(self), (self.controller, self.parameter, self.reason))
+
 
 def parameter(
     default: Value, description: str = "", *, unit: str = "", minimum: float | None = None, maximum: float | None = None

@@ -30,6 +30,10 @@ class TrackFormatError(ValueError):
         self.problem = problem
         super().__init__(f"{self.path}: {where}: {problem}")
 
+    def __reduce__(self) -> tuple[type[TrackFormatError], tuple[str, str, str]]:
+        # pickled with its fields, not its message: a race's worker process sends the error back to the runner
+        return (type(self), (self.path, self.where, self.problem))
+
 
 # --------------------------------------------------------------------------- project JSON format
 class _Fields:

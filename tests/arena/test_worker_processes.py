@@ -1,5 +1,6 @@
 """Tournament worker processes: one that dies loses only the race it was running, which runs again (the results
-equal a run without the fault), and none outlives a runner killed with SIGKILL."""
+equal a run without the fault), a race that fails in its worker reports its own error, and none outlives a runner
+killed with SIGKILL."""
 
 from __future__ import annotations
 
@@ -15,9 +16,11 @@ import psutil
 import pytest
 from support.processes import descendants, describe, survivors_after
 
-from arena.tournament import MemoryStore, Progress, TournamentSpec, run_tournament
+from arena.race import RaceJob
+from arena.tournament import MemoryStore, Progress, TournamentSpec, _process_races, run_tournament
 from server.db import RaceDatabase
 from server.tournament_db import TournamentDatabase
+from sim_core.track_io import TrackFormatError
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEC = TournamentSpec(
@@ -51,6 +54,13 @@ def test_a_worker_that_dies_loses_only_its_race_which_runs_again(caplog: pytest.
     assert [r.index for r in store.figures("t")] == list(range(SPEC.total))
     ours = [(r.index, r.karts, r.duration) for r in store.figures("t")]
     assert ours == [(r.index, r.karts, r.duration) for r in reference.figures("t")]
+
+
+def test_a_race_that_fails_in_its_worker_reports_its_own_error() -> None:
+    # not "its worker process died": the error is sent back whole (it must pickle) and ends the run at once
+    job = RaceJob(index=0, track="no/such/track.json", agents=("lane-follower",), seed=0, start_lanes=(2,))
+    with pytest.raises(TrackFormatError, match=r"^no/such/track\.json: "):
+        list(_process_races([job], workers=1, record=False))
 
 
 def test_no_worker_outlives_a_killed_runner(tmp_path: Path) -> None:

@@ -163,6 +163,15 @@ def test_a_bad_parameter_is_refused_by_name(overrides: dict[str, object], parame
         make_controller("mcts-lqng", **overrides)
 
 
+def test_a_parameter_error_crosses_a_process_boundary_whole() -> None:
+    # a race's worker process pickles the error back to the tournament runner: it must arrive as itself
+    with pytest.raises(ParameterError) as caught:
+        validate_parameters("mcts-lqng", {"horizon": 0})
+    copy_of = pickle.loads(pickle.dumps(caught.value))
+    assert type(copy_of) is ParameterError and str(copy_of) == str(caught.value)
+    assert (copy_of.controller, copy_of.parameter, copy_of.reason) == ("mcts-lqng", "horizon", caught.value.reason)
+
+
 def test_an_unknown_controller_is_still_a_key_error() -> None:
     with pytest.raises(KeyError, match="unknown controller 'nope'"):
         validate_parameters("nope", {})

@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import pickle
 from collections.abc import Callable
 from functools import cache
 from pathlib import Path
@@ -238,6 +239,16 @@ def test_malformed_field_names_file_and_field(
     assert message.startswith(f"{path}: field {field}: ")
     assert "broken_track.json" in message and field in message
     assert isinstance(exc, ValueError)
+
+
+def test_a_track_error_crosses_a_process_boundary_whole() -> None:
+    # a race's worker process pickles the error back to the tournament runner: it must arrive as itself
+    with pytest.raises(TrackFormatError) as info:
+        load_track("no/such/track.json")
+    copy_of = pickle.loads(pickle.dumps(info.value))
+    assert type(copy_of) is TrackFormatError
+    assert (copy_of.path, copy_of.where, copy_of.problem) == (info.value.path, info.value.where, info.value.problem)
+    assert str(copy_of) == str(info.value) and copy_of.path == "no/such/track.json"
 
 
 def test_malformed_root() -> None:
