@@ -15,13 +15,24 @@ from typing import Any
 import controllers.registry as registry
 
 
-def _overridden(build: Callable[[Any], Any], fields: dict[str, Any]) -> Callable[[Any], Any]:
+def _overridden(
+    build: Callable[[Any], Any], fields: dict[str, Any], public: dict[str, Any] | None = None
+) -> Callable[[Any], Any]:
     def build_with(params: Any) -> Any:
-        driver = build(params)
+        driver = build(replace(params, **(public or {})))
         driver.tracker.params = replace(driver.tracker.params, **fields)
         return driver
 
     return build_with
+
+
+def install(name: str, fields: dict[str, Any], public: dict[str, Any] | None = None) -> None:
+    """Wrap registered controller ``name``'s builder: its public parameters changed by ``public``, then its
+    tracker's ``fields`` set (they win over the public parameters)."""
+    spec = registry.controller_spec(name)
+    assert spec.build is not None and spec.params_type is not None
+    build = _overridden(spec.build, fields, public)
+    registry._BY_NAME[name] = replace(spec, build=build, factory=lambda b=build, t=spec.params_type: b(t()))  # type: ignore[misc]
 
 
 def apply() -> dict[str, dict[str, Any]]:
@@ -31,10 +42,6 @@ def apply() -> dict[str, dict[str, Any]]:
         "fixed-lqng": json.loads(os.environ.get("FIXED_TRACKER", "{}")),
     }
     for name, fields in settings.items():
-        if not fields:
-            continue
-        spec = registry.controller_spec(name)
-        assert spec.build is not None and spec.params_type is not None
-        build = _overridden(spec.build, fields)
-        registry._BY_NAME[name] = replace(spec, build=build, factory=lambda b=build, t=spec.params_type: b(t()))
+        if fields:
+            install(name, fields)
     return settings

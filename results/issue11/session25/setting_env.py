@@ -10,36 +10,21 @@ import json
 import os
 import runpy
 import sys
-from collections.abc import Callable
-from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
-import controllers.registry as registry
-
-
-def _wrapped(build: Callable[[Any], Any], public: dict[str, Any], tracker: dict[str, Any]) -> Callable[[Any], Any]:
-    def build_with(params: Any) -> Any:
-        driver = build(replace(params, **public))
-        driver.tracker.params = replace(driver.tracker.params, **tracker)
-        return driver
-
-    return build_with
+sys.path.insert(0, str(Path(__file__).parents[1] / "session24"))
+import tracker_env
 
 
 def apply() -> dict[str, Any]:
     """Wrap mcts-lqng's and fixed-lqng's builders with the environment's settings; returns them."""
     setting = json.loads(os.environ.get("MCTS_SETTING") or '{"public": {}, "tracker": {}}')
     fixed = json.loads(os.environ.get("FIXED_TRACKER") or "{}")
-    for name, public, tracker in (
-        ("mcts-lqng", setting["public"], setting["tracker"]),
-        ("fixed-lqng", {}, fixed),
-    ):
-        if not public and not tracker:
-            continue
-        spec = registry.controller_spec(name)
-        assert spec.build is not None and spec.params_type is not None
-        build = _wrapped(spec.build, public, tracker)
-        registry._BY_NAME[name] = replace(spec, build=build, factory=lambda b=build, t=spec.params_type: b(t()))  # type: ignore[misc]
+    if setting["public"] or setting["tracker"]:
+        tracker_env.install("mcts-lqng", setting["tracker"], setting["public"])
+    if fixed:
+        tracker_env.install("fixed-lqng", fixed)
     return {"mcts-lqng": setting, "fixed-lqng": fixed}
 
 
