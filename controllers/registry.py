@@ -44,7 +44,7 @@ from functools import partial
 from types import MappingProxyType
 from typing import Any, Generic, TypeVar
 
-from controllers.base import Controller
+from controllers.base import Controller, HighLevelPlanner
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController, LaneFollowerParams
@@ -58,6 +58,13 @@ from controllers.lq.tracker import (
 )
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
 from controllers.rl.agents import E2EParams, FixedRLParams, MCTSRLParams, build_e2e, build_fixed_rl, build_mcts_rl
+from controllers.rollout_check import (
+    RIVAL_TRACKING,
+    ROLLOUT_CHECK_HELP,
+    CheckedPlanner,
+    RolloutCheck,
+    RolloutCheckSettings,
+)
 from controllers.tactical.high_level import (
     DEVIATION_GAIN,
     DEVIATION_GAIN_HELP,
@@ -129,6 +136,7 @@ class MCTSLQNGParams:
     own_pace: float = parameter(1.0, OWN_PACE_HELP, minimum=0.8, maximum=1.3)
     close_following: bool = parameter(True, CLOSE_FOLLOWING_HELP)
     grip_steer: float = parameter(0.0, GRIP_STEER_HELP, minimum=0.0, maximum=1.0)
+    rollout_check_depth: int = parameter(0, ROLLOUT_CHECK_HELP, minimum=0, maximum=3)
 
 
 @dataclass(frozen=True)
@@ -148,10 +156,14 @@ class FixedLQNGParams:
 
 
 def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
-    planner = MCTSPlanner.from_settings(params, hold_gain=params.hold_gain_s)
+    search = MCTSPlanner.from_settings(params, hold_gain=params.hold_gain_s)
     tracking = CLOSE_FOLLOWING_TRACKING if params.close_following else MCTS_TRACKING
-    tracker = LQNGTracker(replace(tracking, horizon=params.lqng_horizon_steps, grip_steer=params.grip_steer))
-    return HierarchicalController("mcts-lqng", planner, tracker)
+    tracking = replace(tracking, horizon=params.lqng_horizon_steps, grip_steer=params.grip_steer)
+    planner: HighLevelPlanner = search
+    if params.rollout_check_depth > 0:
+        settings = RolloutCheckSettings(depth=params.rollout_check_depth)
+        planner = CheckedPlanner(search, RolloutCheck(settings, tracking, RIVAL_TRACKING))
+    return HierarchicalController("mcts-lqng", planner, LQNGTracker(tracking))
 
 
 def _fixed_lqng(params: FixedLQNGParams) -> Controller:

@@ -5,6 +5,7 @@ Data flows one way: World -> Observation -> controller -> action -> World.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -94,3 +95,29 @@ def observe(world: World, race: int = 0) -> list[Observation]:
         Observation(time, k, views, world.ray_dist[race, k].copy(), world.ray_hit[race, k].copy())
         for k in range(world.n_karts)
     ]
+
+
+def place_view(world: World, race: int, slot: int, view: KartView, steer: float = 0.0) -> None:
+    """Put kart ``slot`` of ``race`` where ``view`` saw a kart: pose, speed, tyre wear, checkpoint count, lanes and
+    lane-change counters (what a planner races forward from; the kart's other counters start at zero).
+
+    The view has no steering or slip: the kart starts steering ``steer`` in [-1, 1], with the slip that steer holds
+    in a steady turn (:func:`sim_core.kart.kart_step`), so a kart seen mid-corner does not start straight ahead."""
+    track = world.track
+    _, tangent = track.point_at(view.progress)
+    heading_offset = math.remainder(view.heading - math.atan2(float(tangent[1]), float(tangent[0])), 2.0 * math.pi)
+    world.place_kart(
+        race, slot, s=view.progress, d=view.lateral, heading_offset=heading_offset, speed=view.speed, wear=view.wear
+    )
+    f, i = world.fstate[race, slot], world.istate[race, slot]
+    f[st.F_STEER] = steer
+    f[st.F_SLIP] = math.atan(0.5 * math.tan(steer * world.params.kart.max_steer_angle))
+    f[st.F_CROSS_TIME] = view.crossing_time
+    f[st.F_CROSS_SPEED] = view.crossing_speed
+    f[st.F_CROSS_WEAR] = view.crossing_wear
+    i[st.I_CP_PASSED] = view.checkpoints_passed
+    i[st.I_LANE] = view.lane
+    i[st.I_LANE_COUNT] = view.lane_changes
+    i[st.I_LANE_NOW] = view.lane_now or view.lane
+    i[st.I_STEP_LANE_COUNT] = view.lane_changes_now
+    i[st.I_FINISHED] = int(view.finished)

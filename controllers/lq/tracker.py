@@ -529,6 +529,17 @@ class LQNGTracker:
         self._steer = steer
         return Action(steer, float(np.clip(throttle, -1.0, 1.0)))
 
+    def start_steering(self, observation: Observation, plan: Plan | None) -> float:
+        """Take the steer the tracker asks for at ``observation`` as its last steer, with no rate limit, and return
+        it: a tracker started mid-race (a planner's rollout, :mod:`controllers.rollout_check`) would otherwise
+        steer from straight ahead at ``steer_rate``, and run wide out of a corner it is already in."""
+        held = self.params
+        self.params = replace(held, steer_rate=0.0)
+        try:
+            return self.act(observation, plan).steer
+        finally:
+            self.params = held
+
     def _beside(self, track: Track, me: KartView, others: list[KartView]) -> bool:
         """Whether a kart is alongside ``me`` (within ``alongside_distance`` along the track) and within
         ``grip_steer_clearance`` sideways."""

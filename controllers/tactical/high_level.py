@@ -75,7 +75,7 @@ class TacticalSettings(Protocol):
     def own_pace(self) -> float: ...
 
 
-def _lanes_legal(track: Track, lane: int, count: int, waypoints: list[Waypoint], limit: int) -> bool:
+def lanes_legal(track: Track, lane: int, count: int, waypoints: list[Waypoint], limit: int) -> bool:
     """Whether driving through ``waypoints`` from ``lane`` (lane-change counter ``count``) breaks no rule
     (eqs. (10) gen_lane_var and (11) gen_lane_lim, the referee's :func:`~sim_core.rules.lane_change_update`)."""
     for w in waypoints:
@@ -168,6 +168,16 @@ class MCTSPlanner:
             pace_model=settings.pace_model,
             own_pace=settings.own_pace,
         )
+
+    @property
+    def line_lanes(self) -> tuple[int, ...]:
+        """The offline racing line's lane at each checkpoint (set by :meth:`reset`)."""
+        return self._line_lanes
+
+    def commit(self, plan: Plan) -> None:
+        """Hold ``plan``'s ego lanes as the commitment of the next search (a plan changed after the search, by a
+        :class:`~controllers.rollout_check.RolloutCheck`, is the one the kart drives)."""
+        self._committed = {w.checkpoint: w.lane for w in plan.ego_waypoints}
 
     @property
     def lane_limit(self) -> int:
@@ -284,7 +294,7 @@ class MCTSPlanner:
                 continue
             point = track.lane_point(first.checkpoint, me.lane)
             kept = replace(first, lane=me.lane, position=(float(point[0]), float(point[1])))
-            if _lanes_legal(track, me.lane, me.lane_changes, [kept, *waypoints[1:]], self.lane_limit):
+            if lanes_legal(track, me.lane, me.lane_changes, [kept, *waypoints[1:]], self.lane_limit):
                 return replace(plan, waypoints={**plan.waypoints, plan.ego: (kept, *waypoints[1:])})
         return plan
 
@@ -312,7 +322,7 @@ class MCTSPlanner:
         point = self._context.track.lane_point(me.checkpoint, me.lane) if self._context else (0.0, 0.0)
         first = Waypoint(me.checkpoint, me.lane, (float(point[0]), float(point[1])), me.speed, 0.0)
         plan = replace(plan, waypoints={**plan.waypoints, plan.ego: (first, *plan.ego_waypoints)})
-        self._committed = {w.checkpoint: w.lane for w in plan.ego_waypoints}
+        self.commit(plan)
         return plan
 
     def _fill_skipped(self, plan: Plan, me: PlayerState) -> Plan:
@@ -386,7 +396,7 @@ class MCTSPlanner:
             if line_lane != w.lane and not tactical:
                 point = track.lane_point(w.checkpoint, line_lane)
                 snapped = replace(w, lane=line_lane, position=(float(point[0]), float(point[1])))
-                if _lanes_legal(track, lane, count, [snapped, *waypoints[i + 1 :]], limit):
+                if lanes_legal(track, lane, count, [snapped, *waypoints[i + 1 :]], limit):
                     waypoints[i] = snapped
             c = waypoints[i].checkpoint
             count, _ = lane_change_update(

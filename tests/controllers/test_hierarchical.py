@@ -14,7 +14,7 @@ from hypothesis import strategies as hs
 from controllers.base import RaceContext
 from controllers.plan import Plan, Waypoint
 from controllers.tactical.game import GameParams
-from controllers.tactical.high_level import BEHIND_WINDOW, INTERACTION_WINDOW, MCTSPlanner, _lanes_legal
+from controllers.tactical.high_level import BEHIND_WINDOW, INTERACTION_WINDOW, MCTSPlanner, lanes_legal
 from sim_core.observation import KartView, Observation, observe
 from sim_core.params import PAPER_KART, SimParams
 from sim_core.track_io import get_track
@@ -53,13 +53,13 @@ def test_snapping_to_the_line_never_breaks_the_lane_change_rule(
     first = me.checkpoints_passed + 1
     times = [0.8 * (i + 1) for i in range(8)]
     ego = _waypoints(ego_lanes, first, times)
-    if not _lanes_legal(TRACK, me.lane, me.lane_changes, list(ego), limit):
+    if not lanes_legal(TRACK, me.lane, me.lane_changes, list(ego), limit):
         return  # the search only ever returns legal plans
     other = _waypoints(other_lanes, first, [t + gap for t in times])
     plan = Plan(0, first - 1, {0: ego, 1: other}, 50, 1, 0.0)
     snapped = PLANNER._prefer_racing_line(plan, me.lane, me.lane_changes, frozenset({1}) if clear else frozenset())
     out = list(snapped.ego_waypoints)
-    assert _lanes_legal(TRACK, me.lane, me.lane_changes, out, limit)
+    assert lanes_legal(TRACK, me.lane, me.lane_changes, out, limit)
     assert snapped.waypoints[1] == other  # predictions untouched
     for before, after, theirs in zip(ego, out, other, strict=True):
         assert after.checkpoint == before.checkpoint
@@ -121,7 +121,7 @@ def test_a_kart_behind_the_games_root_gets_a_waypoint_at_every_checkpoint() -> N
             assert checkpoints == list(range(cp - behind + 1, cp - behind + 1 + len(checkpoints)))
             assert len(checkpoints) >= GameParams().horizon
             assert plan.ego_waypoints[0].lane == lane  # heading for its next checkpoint in its own lane
-            assert _lanes_legal(TRACK, me.lane, me.lane_changes, list(plan.ego_waypoints), TRACK.lane_change_limit)
+            assert lanes_legal(TRACK, me.lane, me.lane_changes, list(plan.ego_waypoints), TRACK.lane_change_limit)
 
 
 @pytest.mark.parametrize("track_name", ["oval", "oval-reversed", "complex", "complex-reversed"])

@@ -61,6 +61,7 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
         "own_pace": "1.0",
         "close_following": "True",
         "grip_steer": "0.0",
+        "rollout_check_depth": "0",
     }
     assert dict(REGISTRY["fixed-lqng"].parameters) == {
         "line_margin_m": "1.0",

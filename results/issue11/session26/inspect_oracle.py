@@ -13,16 +13,16 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from oracle import ScriptedLanePlanner, oracle_driver  # noqa: E402
+from oracle import ScriptedLanePlanner, oracle_driver
 
-from controllers.base import RaceContext  # noqa: E402
-from controllers.hierarchical import HierarchicalController  # noqa: E402
-from controllers.lq.tracker import FIXED_LINE_TRACKING, LQNGTracker  # noqa: E402
-from controllers.registry import make_controller  # noqa: E402
-from sim_core.observation import observe  # noqa: E402
-from sim_core.params import DT, SimParams, kart_preset  # noqa: E402
-from sim_core.track_io import get_track  # noqa: E402
-from sim_core.world import World  # noqa: E402
+from controllers.base import RaceContext
+from controllers.hierarchical import HierarchicalController
+from controllers.lq.tracker import FIXED_LINE_TRACKING, LQNGTracker
+from controllers.registry import make_controller
+from sim_core.observation import observe
+from sim_core.params import DT, SimParams, kart_preset
+from sim_core.track_io import get_track
+from sim_core.world import World
 
 
 def race(track_name: str, drivers: list, start_lanes: tuple[int, ...]) -> dict:
@@ -67,7 +67,8 @@ def race(track_name: str, drivers: list, start_lanes: tuple[int, ...]) -> dict:
 
 
 def main() -> None:
-    data = json.load(open(sys.argv[1]))
+    with open(sys.argv[1]) as fh:
+        data = json.load(fh)
     lanes = {int(k): v for k, v in data["summary"]["lanes"].items()}
     track = data["summary"]["track"]
     fixed_on_oracle = HierarchicalController(

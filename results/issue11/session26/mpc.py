@@ -24,7 +24,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from oracle import RaceState, finish, fixed_on_lanes, load_lanes, margin, oracle_driver, start_race  # noqa: E402
+from oracle import RaceState, finish, fixed_on_lanes, load_lanes, margin, oracle_driver, start_race
 
 SNAPSHOT: RaceState | None = None
 PENALTY = 1000.0
@@ -72,7 +72,7 @@ def rollout(task: tuple[dict[int, int], int]) -> tuple[float, int, int]:
     return lead - PENALTY * (faults + illegal), faults, illegal
 
 
-def main() -> None:
+def main() -> None:  # noqa: PLR0915 (a research script: one flat run)
     global SNAPSHOT, CLEAN
     ap = argparse.ArgumentParser()
     ap.add_argument("--track", default="complex")
@@ -81,14 +81,21 @@ def main() -> None:
     ap.add_argument("--settle", type=int, default=2)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", required=True)
-    ap.add_argument("--opponent", default="fixed-lqng",
-                    help="fixed-lqng (registered), lanes:FILE (fixed-lqng's tracker on an mpc.py run's lanes), none")
-    ap.add_argument("--clean", action="store_true",
-                    help="penalise every contact and any kart's collision at fault, not only the ego's faults")
+    ap.add_argument(
+        "--opponent",
+        default="fixed-lqng",
+        help="fixed-lqng (registered), lanes:FILE (fixed-lqng's tracker on an mpc.py run's lanes), none",
+    )
+    ap.add_argument(
+        "--clean",
+        action="store_true",
+        help="penalise every contact and any kart's collision at fault, not only the ego's faults",
+    )
     ap.add_argument("--ego-tracker", default="mcts", choices=("mcts", "fixed"))
     args = ap.parse_args()
     CLEAN = args.clean
     start_lanes = tuple(int(x) for x in args.lanes.split(","))
+
     def make_ego(lanes: dict[int, int] | None = None):  # type: ignore[no-untyped-def]
         return oracle_driver(lanes) if args.ego_tracker == "mcts" else fixed_on_lanes(lanes or {})
 
@@ -96,7 +103,7 @@ def main() -> None:
         if args.opponent == "none":
             return None
         if args.opponent.startswith("lanes:"):
-            return fixed_on_lanes(load_lanes(args.opponent[len("lanes:"):]))
+            return fixed_on_lanes(load_lanes(args.opponent[len("lanes:") :]))
         return args.opponent
 
     ego = make_ego()
@@ -117,7 +124,9 @@ def main() -> None:
         SNAPSHOT = state.fork()
         target = min(window[-1] + args.settle, total)
         line = {c: planner.line_lane(c) for c in window}  # type: ignore[attr-defined]
-        tasks = [(dict(zip(window, seq)), target) for seq in itertools.product(range(1, n_lanes + 1), repeat=len(window))]
+        tasks = [
+            (dict(zip(window, seq)), target) for seq in itertools.product(range(1, n_lanes + 1), repeat=len(window))
+        ]
         with ctx.Pool(args.workers) as pool:
             results = pool.map(rollout, tasks, chunksize=max(1, len(tasks) // (4 * args.workers)))
         scored = [
@@ -128,11 +137,18 @@ def main() -> None:
         base = next(r for r in scored if r[1] == line)
         chosen = best[1][window[0]]
         planner.lanes[window[0]] = chosen  # type: ignore[attr-defined]
-        log.append({
-            "checkpoint": window[0], "gap_now_m": round(state.gap(), 3), "line_lane": line[window[0]], "lane": chosen,
-            "best_seq": [best[1][c] for c in window], "best_gap": round(best[2], 3), "line_gap": round(base[2], 3),
-            "clean": sum(1 for r in scored if r[3] == 0 and r[4] == 0),
-        })
+        log.append(
+            {
+                "checkpoint": window[0],
+                "gap_now_m": round(state.gap(), 3),
+                "line_lane": line[window[0]],
+                "lane": chosen,
+                "best_seq": [best[1][c] for c in window],
+                "best_gap": round(best[2], 3),
+                "line_gap": round(base[2], 3),
+                "clean": sum(1 for r in scored if r[3] == 0 and r[4] == 0),
+            }
+        )
         print(json.dumps(log[-1]), f"{time.time() - t0:.0f}s", flush=True)
         w += 1
     # the committed lanes raced from the start, as a plain race (the check that the oracle's race is real)
@@ -140,9 +156,19 @@ def main() -> None:
     replay = finish(start_race(args.track, make_ego(lanes), start_lanes, opponent=make_opponent()))
     baseline = finish(start_race(args.track, make_ego(), start_lanes, opponent=make_opponent()))
     summary = {
-        "track": args.track, "start_lanes": start_lanes, "opponent": args.opponent, "ego_tracker": args.ego_tracker, "clean": args.clean, "depth": args.depth, "settle": args.settle,
-        "oracle": replay, "oracle_margin_s": margin(replay), "line_only": baseline, "line_margin_s": margin(baseline),
-        "lanes": {str(k): v for k, v in sorted(lanes.items())}, "seconds": round(time.time() - t0, 1),
+        "track": args.track,
+        "start_lanes": start_lanes,
+        "opponent": args.opponent,
+        "ego_tracker": args.ego_tracker,
+        "clean": args.clean,
+        "depth": args.depth,
+        "settle": args.settle,
+        "oracle": replay,
+        "oracle_margin_s": margin(replay),
+        "line_only": baseline,
+        "line_margin_s": margin(baseline),
+        "lanes": {str(k): v for k, v in sorted(lanes.items())},
+        "seconds": round(time.time() - t0, 1),
     }
     with open(args.out, "w") as fh:
         json.dump({"summary": summary, "log": log}, fh, indent=1)

@@ -25,8 +25,8 @@ from controllers.hierarchical import HierarchicalController
 from controllers.lq.tracker import CLOSE_FOLLOWING_TRACKING, FIXED_LINE_TRACKING, LQNGTracker
 from controllers.plan import Plan, Waypoint
 from controllers.registry import make_controller
-from sim_core.observation import Observation, observe
 from sim_core import state as st
+from sim_core.observation import Observation, observe
 from sim_core.params import SimParams, kart_preset
 from sim_core.track import Track
 from sim_core.track_io import get_track
@@ -128,8 +128,13 @@ def load_lanes(path: str) -> dict[int, int]:
         return {int(k): int(v) for k, v in json.load(fh)["summary"]["lanes"].items()}
 
 
-def start_race(track_name: str, ego: HierarchicalController, start_lanes: tuple[int, ...] = (2, 3), seed: int = 0,
-               opponent: str | HierarchicalController | None = "fixed-lqng") -> RaceState:
+def start_race(
+    track_name: str,
+    ego: HierarchicalController,
+    start_lanes: tuple[int, ...] = (2, 3),
+    seed: int = 0,
+    opponent: str | HierarchicalController | None = "fixed-lqng",
+) -> RaceState:
     """kart 0 = ``ego``, kart 1 = ``opponent`` (a registered name or a driver; None: the ego races alone), on the
     grid, not yet stepped."""
     track = get_track(track_name)

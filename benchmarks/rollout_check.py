@@ -1,0 +1,91 @@
+"""Plan time of mcts-lqng's rollout check (``rollout_check_depth``, controllers/rollout_check.py) next to the search's
+own plan, in the situation it is for: the first corner of ``complex``, 6 s after a start from lane 2 beside
+fixed-lqng in lane 3 (the other kart just ahead).
+
+Both karts are driven as registered for 300 steps; then, from that one observation, mcts-lqng's search plans alone
+and with the check of depth 1, 2 and 3 (every legal lane sequence: 4, 16 and 64 rollouts), ``ROUNDS`` times each,
+alternating. Reported: the median seconds per plan, the rollouts per check and the milliseconds per rollout.
+Timings depend on the machine and on what else runs. Run from the repo root:
+``.venv/bin/python benchmarks/rollout_check.py``. The last line is one JSON object.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import time
+
+import numpy as np
+
+from controllers.base import RaceContext
+from controllers.hierarchical import HierarchicalController
+from controllers.registry import make_controller
+from controllers.rollout_check import CheckedPlanner
+from sim_core.observation import Observation, observe
+from sim_core.params import SimParams
+from sim_core.track_io import get_track
+from sim_core.world import World
+
+STEPS = 300  # 6 s: the karts are in the first corner, fixed-lqng just ahead
+DEPTHS = (1, 2, 3)
+ROUNDS = 3
+
+
+def first_corner() -> tuple[Observation, RaceContext]:
+    """mcts-lqng's observation 6 s into a lane-2 start on complex against fixed-lqng, and its race context."""
+    track = get_track("complex")
+    world = World(track, 1, 2, SimParams())
+    world.reset(start_lanes=(2, 3))
+    drivers = [make_controller("mcts-lqng"), make_controller("fixed-lqng")]
+    for k, driver in enumerate(drivers):
+        driver.reset(RaceContext(track, world.params.kart, k, 2, world.lane_change_limit, seed=k))
+    actions = np.zeros((1, 2, 2))
+    for _ in range(STEPS):
+        for k, observation in enumerate(observe(world, 0)):
+            action = drivers[k].act(observation)
+            actions[0, k] = (action.steer, action.throttle)
+        world.step(actions)
+    context = RaceContext(track, world.params.kart, 0, 2, world.lane_change_limit, seed=0)
+    return observe(world, 0)[0], context
+
+
+def main() -> None:
+    observation, context = first_corner()
+    planners = {}
+    for depth in (0, *DEPTHS):
+        driver = make_controller("mcts-lqng", rollout_check_depth=depth)
+        assert isinstance(driver, HierarchicalController)
+        driver.planner.reset(context)
+        driver.planner.plan(observation)  # compiles, and fills the search's reused tree as a race would
+        planners[depth] = driver.planner
+    seconds: dict[int, list[float]] = {depth: [] for depth in planners}
+    rollouts: dict[int, int] = {}
+    for _ in range(ROUNDS):
+        for depth, planner in planners.items():
+            before = planner.check.counts.rollouts if isinstance(planner, CheckedPlanner) else 0
+            t0 = time.perf_counter()
+            planner.plan(observation)
+            seconds[depth].append(time.perf_counter() - t0)
+            if isinstance(planner, CheckedPlanner):
+                rollouts[depth] = planner.check.counts.rollouts - before
+    median = {depth: statistics.median(times) for depth, times in seconds.items()}
+    for depth, value in median.items():
+        label = "search alone" if depth == 0 else f"check depth {depth} ({rollouts[depth]} rollouts)"
+        print(f"{label}: {value * 1000:.1f} ms per plan")
+    per_rollout = {
+        depth: (median[depth] - median[0]) / rollouts[depth] * 1000 for depth in DEPTHS if rollouts.get(depth)
+    }
+    print(
+        json.dumps(
+            {
+                "search_plan_ms": round(median[0] * 1000, 2),
+                "checked_plan_ms": {str(d): round(median[d] * 1000, 1) for d in DEPTHS},
+                "rollouts_per_check": {str(d): rollouts.get(d, 0) for d in DEPTHS},
+                "ms_per_rollout": {str(d): round(v, 2) for d, v in per_rollout.items()},
+            }
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,162 @@
+"""The rollout check races candidate lanes from the observed state: a world placed at the views reproduces them,
+no candidate it sends breaks the lane-change rule, it leaves plans alone with nobody ahead, and in the first corner
+of complex it finds the inside pass that the search alone never takes (results/issue11/session26/README.md)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as hs
+
+from controllers.base import RaceContext
+from controllers.lq.tracker import CLOSE_FOLLOWING_TRACKING
+from controllers.plan import Plan, Waypoint
+from controllers.race import RaceSpec, run_race
+from controllers.racing_line import optimise_racing_line
+from controllers.registry import make_controller
+from controllers.rollout_check import RIVAL_TRACKING, CheckedPlanner, RolloutCheck, RolloutCheckSettings
+from controllers.tactical.high_level import MCTSPlanner, lanes_legal
+from sim_core import state as st
+from sim_core.observation import kart_views, observe, place_view
+from sim_core.params import PAPER_KART, SimParams
+from sim_core.track_io import get_track
+from sim_core.world import World
+
+TRACK = get_track("complex")
+CONTEXT = RaceContext(TRACK, PAPER_KART, 0, 2, TRACK.lane_change_limit, 0)
+LINE_LANES = optimise_racing_line(TRACK, PAPER_KART).checkpoint_lanes
+EMPTY = World(TRACK, 1, 2, SimParams(kart=PAPER_KART), sensors=False)
+
+
+def _raced_world(steps: int) -> World:
+    """Two karts driven by fixed-lqng from lanes 2 and 3 for ``steps`` steps."""
+    world = World(TRACK, 1, 2, SimParams(kart=PAPER_KART))
+    world.reset(start_lanes=(2, 3))
+    drivers = [make_controller("fixed-lqng"), make_controller("fixed-lqng")]
+    for k, driver in enumerate(drivers):
+        driver.reset(RaceContext(TRACK, PAPER_KART, k, 2, TRACK.lane_change_limit, k))
+    actions = np.zeros((1, 2, 2))
+    for _ in range(steps):
+        for k, observation in enumerate(observe(world, 0)):
+            action = drivers[k].act(observation)
+            actions[0, k] = (action.steer, action.throttle)
+        world.step(actions)
+    return world
+
+
+def test_a_world_placed_at_the_views_shows_the_same_karts() -> None:
+    source = _raced_world(400)  # 8 s in: mid-corner, counters and lanes away from their start values
+    views = kart_views(source, 0)
+    copy = World(TRACK, 1, 2, SimParams(kart=PAPER_KART), sensors=False)
+    for slot, view in enumerate(views):
+        place_view(copy, 0, slot, view, steer=0.3)
+    for before, after in zip(views, kart_views(copy, 0), strict=True):
+        for name in ("x", "y", "heading", "speed", "progress", "lateral", "wear", "crossing_time"):
+            # the pose goes through (progress, offset) and back: equal to well under a millimetre
+            assert getattr(after, name) == pytest.approx(getattr(before, name), abs=1e-4), name
+        for name in ("checkpoints_passed", "lane", "lane_changes", "lane_now", "lane_changes_now", "finished"):
+            assert getattr(after, name) == getattr(before, name), name
+    # the slip that a steady steer of 0.3 holds: tan(slip) = tan(0.3 * max steer) / 2
+    assert np.tan(copy.fstate[0, 0, st.F_SLIP]) == pytest.approx(0.5 * np.tan(0.3 * PAPER_KART.max_steer_angle))
+
+
+def _check(depth: int = 2, exhaustive: bool = True) -> RolloutCheck:
+    check = RolloutCheck(
+        RolloutCheckSettings(depth=depth, exhaustive=exhaustive), CLOSE_FOLLOWING_TRACKING, RIVAL_TRACKING
+    )
+    check.reset(CONTEXT)
+    return check
+
+
+def _plan(first: int, lanes: list[int]) -> Plan:
+    waypoints = []
+    for i, lane in enumerate(lanes):
+        point = TRACK.lane_point((first + i) % TRACK.n_checkpoints, lane)
+        waypoints.append(Waypoint(first + i, lane, (float(point[0]), float(point[1])), 12.0, 0.9 * i))
+    return Plan(0, first - 1, {0: tuple(waypoints)}, 10, 1, 0.0)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    first=hs.integers(1, 3 * TRACK.n_checkpoints - 6),
+    lanes=hs.lists(hs.integers(1, 4), min_size=6, max_size=6),
+    start_lane=hs.integers(1, 4),
+    start_count=hs.integers(0, 4),
+    depth=hs.integers(1, 3),
+    exhaustive=hs.booleans(),
+)
+def test_no_candidate_breaks_the_lane_change_rule(
+    first: int, lanes: list[int], start_lane: int, start_count: int, depth: int, exhaustive: bool
+) -> None:
+    check = _check(depth, exhaustive)
+    me = replace(kart_views(EMPTY, 0)[0], checkpoints_passed=first - 1, lane=start_lane, lane_changes=start_count)
+    plan = _plan(first, lanes)
+    limit = TRACK.lane_change_limit
+    candidates = check.candidates(plan, me, LINE_LANES, limit)
+    searched = tuple(lanes[1 : 1 + depth])
+    assert candidates[0] == searched  # the search's own lanes come first, legal or not (it only sends legal ones)
+    assert len(set(candidates)) == len(candidates)
+    for lanes_tried in candidates[1:]:
+        waypoints = check.with_lanes(plan.ego_waypoints, lanes_tried)
+        assert lanes_legal(TRACK, start_lane, start_count, list(waypoints), limit)
+        # only the window changes: the committed first waypoint and the tail are the search's
+        assert waypoints[0] == plan.ego_waypoints[0]
+        assert waypoints[1 + depth :] == plan.ego_waypoints[1 + depth :]
+        assert tuple(w.lane for w in waypoints[1 : 1 + depth]) == lanes_tried
+
+
+def test_an_exhaustive_check_tries_every_legal_sequence() -> None:
+    check = _check(depth=2)
+    me = replace(kart_views(EMPTY, 0)[0], checkpoints_passed=5, lane=4, lane_changes=0)
+    # checkpoints 6-8 lie in the first corner, where the lane-change rule sets no limit: all 16 sequences
+    candidates = check.candidates(_plan(6, [4, 3, 3, 3]), me, LINE_LANES, TRACK.lane_change_limit)
+    assert sorted(candidates) == sorted((a, b) for a in range(1, 5) for b in range(1, 5))
+
+
+def test_with_nobody_ahead_the_plan_is_sent_as_searched() -> None:
+    world = World(TRACK, 1, 2, SimParams(kart=PAPER_KART), sensors=False)
+    world.reset(start_lanes=(2, 3))
+    world.place_kart(0, 1, s=200.0, d=0.0)  # far ahead: out of reach
+    observation = observe(world, 0)[0]
+    check = _check()
+    plan = _plan(1, [2, 2, 3, 4, 4])
+    assert check.check(observation, plan, LINE_LANES, TRACK.lane_change_limit) is plan
+    assert (check.counts.plans, check.counts.checked, check.counts.rollouts) == (1, 0, 0)
+
+
+def test_the_checked_planner_holds_the_inside_of_the_first_corner_and_passes() -> None:
+    """From lane 2 of complex, the kart in lane 3 takes the inside of the 270-degree first corner. mcts-lqng as
+    registered follows the line out to lane 3 behind it (and loses every lane-2 start); with the check it stays on
+    the inside through checkpoints 7-9 and leads at checkpoint 10."""
+    crossings: dict[tuple[int, int], tuple[int, int]] = {}
+
+    def record(world: World, drivers: object, step: int) -> None:
+        for k in (0, 1):
+            key = (k, int(world.istate[0, k, st.I_CP_PASSED]))
+            crossings.setdefault(key, (int(world.istate[0, k, st.I_LANE]), step))
+
+    spec = RaceSpec("complex", ("mcts-lqng", "fixed-lqng"), seed=0, start_lanes=(2, 3), time_limit=11.5)
+    checked = make_controller("mcts-lqng", rollout_check_depth=3)
+    assert isinstance(checked.planner, CheckedPlanner)  # type: ignore[attr-defined]
+    run_race(spec, drivers=[checked, make_controller("fixed-lqng")], on_step=record)
+    inside = [crossings[(0, c)][0] for c in (7, 8, 9)]
+    assert min(inside) >= 3 and 4 in inside, inside  # on the inside half, in lane 4 at one crossing at least
+    assert crossings[(0, 10)][1] < crossings[(1, 10)][1]  # the ego crossed checkpoint 10 first
+    result_faults = checked.planner.check.counts  # type: ignore[attr-defined]
+    assert result_faults.changed >= 1
+
+    crossings.clear()
+    run_race(spec, drivers=[make_controller("mcts-lqng"), make_controller("fixed-lqng")], on_step=record)
+    assert crossings[(0, 10)][1] > crossings[(1, 10)][1]  # without the check it is still behind there
+
+
+def test_a_search_with_the_check_is_the_registered_planner_underneath() -> None:
+    checked = make_controller("mcts-lqng", rollout_check_depth=2)
+    plain = make_controller("mcts-lqng")
+    assert isinstance(checked.planner, CheckedPlanner)  # type: ignore[attr-defined]
+    assert isinstance(plain.planner, MCTSPlanner)  # type: ignore[attr-defined]
+    assert checked.planner.check.settings.depth == 2  # type: ignore[attr-defined]
+    assert checked.planner.inner.iterations == plain.planner.iterations  # type: ignore[attr-defined]
