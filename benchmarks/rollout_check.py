@@ -2,10 +2,10 @@
 own plan, in the situation it is for: the first corner of ``complex``, 6 s after a start from lane 2 beside
 fixed-lqng in lane 3 (the other kart just ahead).
 
-Both karts are driven as registered for 300 steps; then, from that one observation, mcts-lqng's search plans alone
-and with the check of depth 1, 2 and 3 (every legal lane sequence: 4, 16 and 64 rollouts), ``ROUNDS`` times each,
-alternating. Reported: the median seconds per plan, the rollouts per check and the milliseconds per rollout.
-Timings depend on the machine and on what else runs. Run from the repo root:
+Both karts race as registered (``controllers.race.run_race``) for 6 s; then, from that one observation, mcts-lqng's
+search plans alone and with the check of depth 1, 2 and 3 (every legal lane sequence: 4, 16 and 64 rollouts),
+``ROUNDS`` times each, alternating. Reported: the median seconds per plan, the rollouts per check and the
+milliseconds per rollout. Timings depend on the machine and on what else runs. Run from the repo root:
 ``.venv/bin/python benchmarks/rollout_check.py``. The last line is one JSON object.
 """
 
@@ -15,37 +15,26 @@ import json
 import statistics
 import time
 
-import numpy as np
-
 from controllers.base import RaceContext
 from controllers.hierarchical import HierarchicalController
+from controllers.race import RaceSpec, run_race
 from controllers.registry import make_controller
 from controllers.rollout_check import CheckedPlanner
 from sim_core.observation import Observation, observe
-from sim_core.params import SimParams
-from sim_core.track_io import get_track
 from sim_core.world import World
 
-STEPS = 300  # 6 s: the karts are in the first corner, fixed-lqng just ahead
+SECONDS = 6.0  # the karts are in the first corner, fixed-lqng just ahead
 DEPTHS = (1, 2, 3)
 ROUNDS = 3
 
 
 def first_corner() -> tuple[Observation, RaceContext]:
     """mcts-lqng's observation 6 s into a lane-2 start on complex against fixed-lqng, and its race context."""
-    track = get_track("complex")
-    world = World(track, 1, 2, SimParams())
-    world.reset(start_lanes=(2, 3))
-    drivers = [make_controller("mcts-lqng"), make_controller("fixed-lqng")]
-    for k, driver in enumerate(drivers):
-        driver.reset(RaceContext(track, world.params.kart, k, 2, world.lane_change_limit, seed=k))
-    actions = np.zeros((1, 2, 2))
-    for _ in range(STEPS):
-        for k, observation in enumerate(observe(world, 0)):
-            action = drivers[k].act(observation)
-            actions[0, k] = (action.steer, action.throttle)
-        world.step(actions)
-    context = RaceContext(track, world.params.kart, 0, 2, world.lane_change_limit, seed=0)
+    raced: list[World] = []
+    spec = RaceSpec("complex", ("mcts-lqng", "fixed-lqng"), start_lanes=(2, 3), time_limit=SECONDS)
+    run_race(spec, on_step=lambda world, drivers, step: raced.append(world) if not raced else None)
+    world = raced[0]
+    context = RaceContext(world.track, world.params.kart, 0, 2, world.lane_change_limit, seed=0)
     return observe(world, 0)[0], context
 
 

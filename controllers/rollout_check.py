@@ -156,11 +156,10 @@ class RolloutCheck:
         world, trackers = self._world, self._trackers
         self.counts.rollouts += 1
         world.clear_race(0)
-        ego_index = observation.ego
-        waypoints = {0: plan.waypoints.get(ego_index, ()), 1: plan.waypoints.get(rival.index, ())}
+        waypoints = {0: plan.waypoints.get(observation.ego, ()), 1: plan.waypoints.get(rival.index, ())}
         rollout_plan = replace(plan, ego=0, waypoints=waypoints)
         for slot, view in enumerate((observation.me, rival)):
-            place_view(world, 0, slot, replace(view, index=slot))
+            place_view(world, 0, slot, view)
         # each tracker starts steering what it asks for now (its steering is rate-limited): from straight ahead a
         # kart seen mid-corner runs wide and every candidate touches the other kart
         views = observe(world, 0)

@@ -31,24 +31,16 @@ LINE_LANES = optimise_racing_line(TRACK, PAPER_KART).checkpoint_lanes
 EMPTY = World(TRACK, 1, 2, SimParams(kart=PAPER_KART), sensors=False)
 
 
-def _raced_world(steps: int) -> World:
-    """Two karts driven by fixed-lqng from lanes 2 and 3 for ``steps`` steps."""
-    world = World(TRACK, 1, 2, SimParams(kart=PAPER_KART))
-    world.reset(start_lanes=(2, 3))
-    drivers = [make_controller("fixed-lqng"), make_controller("fixed-lqng")]
-    for k, driver in enumerate(drivers):
-        driver.reset(RaceContext(TRACK, PAPER_KART, k, 2, TRACK.lane_change_limit, k))
-    actions = np.zeros((1, 2, 2))
-    for _ in range(steps):
-        for k, observation in enumerate(observe(world, 0)):
-            action = drivers[k].act(observation)
-            actions[0, k] = (action.steer, action.throttle)
-        world.step(actions)
-    return world
+def _raced_world(seconds: float) -> World:
+    """The world of a race of two fixed-lqng karts from lanes 2 and 3, stopped after ``seconds``."""
+    raced: list[World] = []
+    spec = RaceSpec("complex", ("fixed-lqng", "fixed-lqng"), start_lanes=(2, 3), time_limit=seconds)
+    run_race(spec, on_step=lambda world, drivers, step: raced.append(world) if not raced else None)
+    return raced[0]
 
 
 def test_a_world_placed_at_the_views_shows_the_same_karts() -> None:
-    source = _raced_world(400)  # 8 s in: mid-corner, counters and lanes away from their start values
+    source = _raced_world(8.0)  # 8 s in: mid-corner, counters and lanes away from their start values
     views = kart_views(source, 0)
     copy = World(TRACK, 1, 2, SimParams(kart=PAPER_KART), sensors=False)
     for slot, view in enumerate(views):
