@@ -9,6 +9,7 @@ the usual forward (acceleration) / backward (braking) pass under the cornering s
 
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -54,12 +55,41 @@ class RacingLine:
     def offset_at(self, s: float | np.ndarray) -> float | np.ndarray:
         """Lateral offset [m] of the line at centre-line progress ``s`` (periodic interpolation)."""
         length, s_closed, offset_closed, _ = self._closed
+        if isinstance(s, float):
+            return _interp_at(s % length, self._lookup, 1)
         return np.interp(np.mod(s, length), s_closed, offset_closed)
 
     def speed_at(self, s: float | np.ndarray) -> float | np.ndarray:
         """Speed [m/s] of the line's profile at centre-line progress ``s`` (periodic interpolation)."""
         length, s_closed, _, speed_closed = self._closed
+        if isinstance(s, float):
+            return _interp_at(s % length, self._lookup, 2)
         return np.interp(np.mod(s, length), s_closed, speed_closed)
+
+    @cached_property
+    def _lookup(self) -> tuple[list[float], ...]:
+        # the LQ trackers look the line up a few times per kart and step, one point at a time, where np.interp's
+        # call costs more than the arithmetic: the closed samples as floats and each segment's slopes (each
+        # computed as np.interp computes it, so a point gets the very same number)
+        _, s_closed, offset_closed, speed_closed = self._closed
+        xs = [float(v) for v in s_closed]
+        table: list[list[float]] = [xs]
+        for values in (offset_closed, speed_closed):
+            ys = [float(v) for v in values]
+            table += [ys, [(ys[i + 1] - ys[i]) / (xs[i + 1] - xs[i]) for i in range(len(xs) - 1)]]
+        return tuple(table)
+
+
+def _interp_at(x: float, lookup: tuple[list[float], ...], column: int) -> float:
+    """np.interp(x, xs, ys) for one point, as numpy computes it: ``lookup`` is ``RacingLine._lookup``, ys its
+    entry ``2 * column - 1`` and the slopes the next."""
+    xs, ys, slopes = lookup[0], lookup[2 * column - 1], lookup[2 * column]
+    j = bisect.bisect_right(xs, x) - 1
+    if j < 0:
+        return ys[0]
+    if j >= len(xs) - 1 or xs[j] == x:
+        return ys[j]
+    return slopes[j] * (x - xs[j]) + ys[j]
 
 
 def _centre_samples(track: Track, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

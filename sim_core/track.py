@@ -12,6 +12,7 @@ Conventions
 
 from __future__ import annotations
 
+import bisect
 import re
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -139,8 +140,15 @@ class Track:
 
     # ----------------------------------------------------------------- lanes
     def lane_offsets(self, checkpoint: int) -> np.ndarray:
-        """(n_lanes,) lateral offsets [m] (left-positive) of the lanes at ``checkpoint``."""
-        return self._lane_offsets_at_sample(int(self.checkpoint_sample[checkpoint % self.n_checkpoints]))
+        """(n_lanes,) lateral offsets [m] (left-positive) of the lanes at ``checkpoint`` (read-only)."""
+        return self._checkpoint_lane_offsets[checkpoint % len(self.checkpoints)]
+
+    @cached_property
+    def _checkpoint_lane_offsets(self) -> np.ndarray:
+        # looked up at every step by every LQ tracker: computed once per checkpoint
+        table = np.stack([self._lane_offsets_at_sample(int(i)) for i in self.checkpoint_sample])
+        table.flags.writeable = False
+        return table
 
     def _lane_offsets_at_sample(self, i: int) -> np.ndarray:
         frac = np.asarray(self.lane_fractions)
@@ -192,13 +200,22 @@ class Track:
     def point_at(self, s: float) -> tuple[np.ndarray, np.ndarray]:
         """(position, unit tangent) on the centre line at arc length ``s`` [m] (wraps)."""
         s = s % self.length
-        i = int(np.searchsorted(self.centre_s, s, side="right") - 1)
-        j = (i + 1) % len(self.centre_s)
-        seg_end = self.centre_s[j] if j else self.length
-        u = (s - self.centre_s[i]) / max(seg_end - self.centre_s[i], 1e-12)
-        a, b = self.centre_xy[i], self.centre_xy[j]
-        tangent = (b - a) / np.linalg.norm(b - a)
-        return a + u * (b - a), tangent
+        starts, ends, deltas, tangents = self._segments
+        i = bisect.bisect_right(starts, s) - 1
+        u = (s - starts[i]) / max(ends[i] - starts[i], 1e-12)
+        return self.centre_xy[i] + u * deltas[i], tangents[i]
+
+    @cached_property
+    def _segments(self) -> tuple[list[float], list[float], np.ndarray, np.ndarray]:
+        # point_at runs at every step of every LQ tracker: each segment's start and end [m], its vector and its
+        # unit tangent, computed once (as point_at computed them per call: the same numbers to the last bit)
+        m = len(self.centre_s)
+        starts = [float(v) for v in self.centre_s]
+        ends = [*starts[1:], float(self.length)]
+        deltas = np.stack([self.centre_xy[(i + 1) % m] - self.centre_xy[i] for i in range(m)])
+        tangents = np.stack([d / np.linalg.norm(d) for d in deltas])
+        deltas.flags.writeable = tangents.flags.writeable = False
+        return starts, ends, deltas, tangents
 
     def project(self, xy: np.ndarray) -> tuple[float, float]:
         """Progress ``s`` [m] and lateral offset ``d`` [m, left-positive] of a world position (global search)."""

@@ -15,7 +15,7 @@ from numba import njit
 
 
 @njit(cache=True)
-def _coupled_riccati(
+def coupled_riccati(
     A: np.ndarray,
     B_all: np.ndarray,
     offsets: np.ndarray,
@@ -25,6 +25,9 @@ def _coupled_riccati(
     c: np.ndarray,
     horizon: int,
 ) -> tuple[np.ndarray, np.ndarray]:
+    """The recursion behind :func:`feedback_nash` on stacked arrays: ``B_all`` (n, sum m_i) every player's
+    ``B_i`` side by side, player i's columns ``offsets[i]:offsets[i + 1]``, ``Q`` (players, n, n), ``q``
+    (players, n), ``R_all`` block-diagonal, ``c`` the affine term. Compiled; callable from other kernels."""
     n = A.shape[0]
     players = Q.shape[0]
     total = B_all.shape[1]
@@ -81,7 +84,7 @@ def feedback_nash(
     for i, Ri in enumerate(R):
         R_all[offsets[i] : offsets[i + 1], offsets[i] : offsets[i + 1]] = Ri
     n = A.shape[0]
-    return _coupled_riccati(
+    return coupled_riccati(
         np.ascontiguousarray(A, dtype=np.float64),
         np.ascontiguousarray(np.hstack(B), dtype=np.float64),
         offsets,

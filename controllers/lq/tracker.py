@@ -27,8 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from controllers.base import Action, RaceContext
-from controllers.lq.game import STATE_SIZE, add_denial_cost, add_separation_cost, add_waypoint_cost, linearised_dynamics
-from controllers.lq.nash import feedback_nash
+from controllers.lq.game import STATE_SIZE, solve_tracker_game
 from controllers.plan import Plan, Waypoint
 from controllers.racing_line import RacingLine, optimise_racing_line
 from sim_core.kart import lateral_limit, throttle_for_acceleration
@@ -487,7 +486,6 @@ class LQNGTracker:
         alongside = any(abs(track.gap(me.progress, k.progress)) < self.params.alongside_distance for k in others)
         if alongside or (self.params.pass_distance > 0.0 and self._passing(track, me, others, plan)):
             tolerance = 0.0
-        A, B = linearised_dynamics(players, DT)
         x0 = np.zeros(STATE_SIZE * len(players))
         targets = []
         station = math.inf
@@ -510,16 +508,14 @@ class LQNGTracker:
                     station = self._station_limit(me, others, aim_offset, straight, track)
                 speed = min(speed * self.params.speed_scale, station)
             targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))
-        Q, q = self._costs(players, targets, plan)
-        R = [w.control * np.eye(2) for _ in players]
-        P, alpha = feedback_nash(A, B, Q, q, R, self.params.horizon)
+        P, alpha = self._solve(players, targets, plan)
         accel, yaw_rate = -(P[0][0:2] @ x0) - alpha[0][0:2]
         if me.speed > station:
             # closing on the kart ahead: brake at once (the LQ speed weight is too soft for it)
             accel = min(float(accel), -self.params.follow_brake_gain * (me.speed - station))
         throttle = throttle_for_acceleration(self._kart_vector, me.speed, float(accel))
         speed = max(abs(me.speed), 1.0)
-        steer = float(np.clip(math.atan(yaw_rate * kart.wheelbase / speed) / kart.max_steer_angle, -1.0, 1.0))
+        steer = min(max(math.atan(yaw_rate * kart.wheelbase / speed) / kart.max_steer_angle, -1.0), 1.0)
         if self.params.grip_steer > 0.0 and not self._beside(track, me, others):
             held = self._grip_steer(me)
             steer = min(max(steer, -held), held)
@@ -527,7 +523,7 @@ class LQNGTracker:
             step = self.params.steer_rate * DT
             steer = min(max(steer, self._steer - step), self._steer + step)
         self._steer = steer
-        return Action(steer, float(np.clip(throttle, -1.0, 1.0)))
+        return Action(steer, min(max(float(throttle), -1.0), 1.0))
 
     def start_steering(self, observation: Observation, plan: Plan | None) -> float:
         """Take the steer the tracker asks for at ``observation`` as its last steer, with no rate limit, and return
@@ -561,25 +557,36 @@ class LQNGTracker:
         tan_delta = 2.0 * sin_beta / math.sqrt(1.0 - sin_beta * sin_beta)
         return min(math.atan(tan_delta) / kart.max_steer_angle, 1.0)
 
-    def _costs(
+    def _solve(
         self, players: list[KartView], targets: list[tuple[float, float, float, float]], plan: Plan | None
-    ) -> tuple[list[np.ndarray], list[np.ndarray]]:
-        """Every player's (Q_i, q_i), eq. (23) lqng_obj: its waypoint (20) paid, the separation from each other
-        player (22) earned, and for the ego alone the denial (21) of each opponent's predicted waypoint. The
-        opponents are assumed to play the same game with their own avoidance scale and no denial."""
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The game's feedback Nash gains (``P``, ``alpha``), eq. (23) lqng_obj for every player: its waypoint
+        (20) paid, the separation from each other player (22) earned, and for the ego alone the denial (21) of
+        each opponent's predicted waypoint. The opponents are assumed to play the same game with their own
+        avoidance scale and no denial."""
         w = self.params.weights
         me = players[0]
-        n = STATE_SIZE * len(players)
-        Q = [np.zeros((n, n)) for _ in players]
-        q = [np.zeros(n) for _ in players]
+        count = len(players)
+        separation = np.zeros((count, count))
+        denied = np.zeros(count, dtype=np.bool_)
         for i, k in enumerate(players):
-            add_waypoint_cost(Q[i], q[i], i, targets[i], w.position / max(1.0, k.speed), w.speed, w.heading)
             scale = w.avoid_scale if i == 0 else w.opponent_avoid_scale
             for j, other in enumerate(players):
-                if j == i:
-                    continue
-                dist = max(math.hypot(other.x - k.x, other.y - k.y), 0.5)
-                add_separation_cost(Q[i], i, j, 1.0 / (dist**1.5 * scale))
-                if i == 0 and plan is not None and other.index in plan.waypoints:
-                    add_denial_cost(Q[i], q[i], j, targets[j][:2], w.deny / max(1.0, me.speed))
-        return Q, q
+                if j != i:
+                    dist = max(math.hypot(other.x - k.x, other.y - k.y), 0.5)
+                    separation[i, j] = 1.0 / (dist**1.5 * scale)
+            denied[i] = i > 0 and plan is not None and k.index in plan.waypoints
+        return solve_tracker_game(
+            np.array([k.heading for k in players]),
+            np.array([k.speed for k in players]),
+            np.array(targets),
+            np.array([w.position / max(1.0, k.speed) for k in players]),
+            w.speed,
+            w.heading,
+            separation,
+            denied,
+            w.deny / max(1.0, me.speed),
+            w.control,
+            DT,
+            self.params.horizon,
+        )

@@ -9,6 +9,13 @@ import scipy.linalg
 from hypothesis import given, settings
 from hypothesis import strategies as hs
 
+from controllers.lq.game import (
+    add_denial_cost,
+    add_separation_cost,
+    add_waypoint_cost,
+    linearised_dynamics,
+    solve_tracker_game,
+)
 from controllers.lq.nash import feedback_nash
 
 
@@ -86,3 +93,35 @@ def test_gains_are_finite_for_the_tracker_sized_game() -> None:
     assert np.isfinite(P).all() and np.isfinite(alpha).all()
     with pytest.raises(np.linalg.LinAlgError):
         feedback_nash(np.eye(2), [np.zeros((2, 1))], [np.zeros((2, 2))], [np.zeros(2)], [np.zeros((1, 1))], 1)
+
+
+def test_the_trackers_compiled_game_is_the_game_assembled_term_by_term() -> None:
+    """solve_tracker_game (assembled and solved in one compiled call) against the same three-player game built
+    from eq. (24) and the cost terms (20)-(22) one call at a time and solved by feedback_nash."""
+    rng = np.random.default_rng(7)
+    players, dt, horizon = 3, 0.02, 4
+    headings, speeds = rng.uniform(-3, 3, players), rng.uniform(0, 15, players)
+    targets = rng.normal(size=(players, 4))
+    position_weights = rng.uniform(0.05, 1.0, players)
+    separation = rng.uniform(0.01, 0.2, (players, players))
+    denied = np.array([False, True, False])
+    P, alpha = solve_tracker_game(
+        headings, speeds, targets, position_weights, 1.0, 3.5, separation, denied, 0.02, 0.115, dt, horizon
+    )
+    A, B_all = linearised_dynamics(headings, speeds, dt)
+    n = 4 * players
+    Q, q = [np.zeros((n, n)) for _ in range(players)], [np.zeros(n) for _ in range(players)]
+    for i in range(players):
+        add_waypoint_cost(Q[i], q[i], i, targets[i], position_weights[i], 1.0, 3.5)
+        for j in range(players):
+            if j != i:
+                add_separation_cost(Q[i], i, j, separation[i, j])
+                if i == 0 and denied[j]:
+                    add_denial_cost(Q[i], q[i], j, targets[j], 0.02)
+    B = [B_all[:, 2 * i : 2 * i + 2] for i in range(players)]
+    assert np.allclose(B_all[4 * 1 + 2], [0, 0, dt, 0, 0, 0])  # player 1's speed moves with its own a alone
+    P_ref, alpha_ref = feedback_nash(A, B, Q, q, [0.115 * np.eye(2)] * players, horizon)
+    np.testing.assert_allclose(P, P_ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(alpha, alpha_ref, rtol=1e-12, atol=1e-12)
+    # the denial makes the ego pay to pull opponent 1 off its waypoint: q of the ego at that opponent's x is set
+    assert q[0][4] == 2.0 * 0.02 * targets[1][0]

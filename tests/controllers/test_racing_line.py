@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as hs
 
 from controllers.racing_line import handset_line, minimum_curvature_offsets, optimise_racing_line, speed_profile
 from sim_core.params import PAPER_KART
@@ -69,3 +71,14 @@ def test_speed_profile_respects_acceleration_and_braking() -> None:
     assert np.all(dv2 <= 2 * PAPER_KART.acceleration * ds + 1e-6)
     assert np.all(-dv2 <= 2 * PAPER_KART.braking * ds + 1e-6)
     assert v.max() == pytest.approx(PAPER_KART.top_speed)
+
+
+@settings(max_examples=300, deadline=None)
+@given(s=hs.floats(min_value=-2000.0, max_value=4000.0, allow_nan=False))
+def test_one_point_lookups_equal_np_interp_to_the_last_bit(s: float) -> None:
+    """The trackers' one-point lookup (a bisection and the segment's slope) returns what np.interp returns, the
+    same double: races are deterministic and every published result depends on it."""
+    line = optimise_racing_line(get_track("complex"), PAPER_KART)
+    for sample in (s, *line.s[:3].tolist(), float(line.s[-1])):
+        assert line.offset_at(sample) == line.offset_at(np.array([sample]))[0]
+        assert line.speed_at(sample) == line.speed_at(np.array([sample]))[0]

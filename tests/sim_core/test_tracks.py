@@ -489,3 +489,32 @@ def test_the_gap_along_the_track_takes_the_nearer_way_round_the_lap() -> None:
     assert track.gap(length - 5.0, 3.0) == pytest.approx(8.0)  # just over the line: ahead
     assert track.gap(3.0, length - 5.0) == pytest.approx(-8.0)
     assert PAPER_KART.body_length == pytest.approx(2.0)  # the capsule: 2 x (0.55 + 0.45) m
+
+
+@settings(max_examples=200, deadline=None)
+@given(s=st.floats(min_value=-500.0, max_value=3000.0, allow_nan=False))
+def test_point_at_equals_the_segment_interpolation(s: float) -> None:
+    """point_at (segments looked up from a table) against the interpolation written out: the sample before
+    ``s``, the next one, and the unit vector between them, to the last bit."""
+    track = get_track("complex")
+    point, tangent = track.point_at(s)
+    wrapped = s % track.length
+    i = int(np.searchsorted(track.centre_s, wrapped, side="right") - 1)
+    j = (i + 1) % len(track.centre_s)
+    end = track.centre_s[j] if j else track.length
+    a, b = track.centre_xy[i], track.centre_xy[j]
+    u = (wrapped - track.centre_s[i]) / max(end - track.centre_s[i], 1e-12)
+    assert np.array_equal(point, a + u * (b - a))
+    assert np.array_equal(tangent, (b - a) / np.linalg.norm(b - a))
+    assert math.isclose(float(np.hypot(*tangent)), 1.0, rel_tol=1e-12)
+
+
+def test_lane_offsets_are_read_only_and_match_the_sample_table() -> None:
+    """The per-checkpoint lane offsets are the sample table's rows at the checkpoints, and nobody can change them."""
+    track = get_track("complex")
+    table = track.sample_lane_offsets()
+    for c in range(-1, track.n_checkpoints + 1):
+        row = track.lane_offsets(c)
+        assert np.array_equal(row, table[track.checkpoint_sample[c % track.n_checkpoints]])
+        with pytest.raises(ValueError):
+            row[0] = 0.0
