@@ -5,7 +5,9 @@ fixed-lqng in lane 3 (the other kart just ahead).
 Both karts race as registered (``controllers.race.run_race``) for 6 s; then, from that one observation, mcts-lqng's
 search plans alone and with the check of depth 1, 2 and 3 (every legal lane sequence: 4, 16 and 64 rollouts),
 ``ROUNDS`` times each, alternating. Reported: the median seconds per plan, the rollouts per check and the
-milliseconds per rollout. Timings depend on the machine and on what else runs. Run from the repo root:
+milliseconds per rollout; and, for the depth-3 check's candidates, the seconds to score them as a tree (shared
+beginnings raced once, the check's way) next to racing each alone, with the steps each took. Timings depend on
+the machine and on what else runs. Run from the repo root:
 ``.venv/bin/python benchmarks/rollout_check.py``. The last line is one JSON object.
 """
 
@@ -38,6 +40,40 @@ def first_corner() -> tuple[Observation, RaceContext]:
     return observe(world, 0)[0], context
 
 
+def tree_against_alone(planner: object, observation: Observation) -> dict[str, float]:
+    """Seconds (median of ``ROUNDS``, alternating) and steps to score the check's candidates at ``observation``
+    as a tree and one by one; the scores must agree."""
+    assert isinstance(planner, CheckedPlanner)
+    check, inner = planner.check, planner.inner
+    plan = inner.plan(observation)
+    rival = check.rival(observation)
+    assert rival is not None, "the benchmark's situation has the other kart in reach"
+    target = plan.ego_waypoints[check.settings.depth].checkpoint + check.settings.settle
+    candidates = check.candidates(plan, observation.me, inner.line_lanes, inner.lane_limit)
+    times: dict[str, list[float]] = {"tree": [], "alone": []}
+    steps: dict[str, int] = {}
+    for _ in range(ROUNDS):
+        before, t0 = check.counts.steps, time.perf_counter()
+        tree = check.scores(observation, rival, plan, target, candidates)
+        times["tree"].append(time.perf_counter() - t0)
+        steps["tree"] = check.counts.steps - before
+        before, t0 = check.counts.steps, time.perf_counter()
+        alone = {c: check.score(observation, rival, check.with_lanes_plan(plan, c), target) for c in candidates}
+        times["alone"].append(time.perf_counter() - t0)
+        steps["alone"] = check.counts.steps - before
+        assert tree == alone, "the tree's scores differ from racing each candidate alone"
+    tree_s, alone_s = statistics.median(times["tree"]), statistics.median(times["alone"])
+    print(f"{len(candidates)} candidates: tree {tree_s:.2f} s ({steps['tree']} steps), one by one {alone_s:.2f} s")
+    return {
+        "candidates": len(candidates),
+        "tree_s": round(tree_s, 3),
+        "alone_s": round(alone_s, 3),
+        "tree_steps": steps["tree"],
+        "alone_steps": steps["alone"],
+        "tree_speedup": round(alone_s / tree_s, 2),
+    }
+
+
 def main() -> None:
     observation, context = first_corner()
     planners = {}
@@ -58,6 +94,7 @@ def main() -> None:
             if isinstance(planner, CheckedPlanner):
                 rollouts[depth] = planner.check.counts.rollouts - before
     median = {depth: statistics.median(times) for depth, times in seconds.items()}
+    tree = tree_against_alone(planners[DEPTHS[-1]], observation)
     for depth, value in median.items():
         label = "search alone" if depth == 0 else f"check depth {depth} ({rollouts[depth]} rollouts)"
         print(f"{label}: {value * 1000:.1f} ms per plan")
@@ -71,6 +108,7 @@ def main() -> None:
                 "checked_plan_ms": {str(d): round(median[d] * 1000, 1) for d in DEPTHS},
                 "rollouts_per_check": {str(d): rollouts.get(d, 0) for d in DEPTHS},
                 "ms_per_rollout": {str(d): round(v, 2) for d, v in per_rollout.items()},
+                **tree,
             }
         )
     )

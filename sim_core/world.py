@@ -428,3 +428,13 @@ class World:
             "ray_dist": self.ray_dist.copy(),
             "ray_hit": self.ray_hit.copy(),
         }
+
+    def restore_state(self, arrays: dict[str, np.ndarray]) -> None:
+        """Put back every state array from a :meth:`state_arrays` copy of this world (in place: views of the world
+        stay valid). A planner's rollouts branch this way, from one copy, without stepping the shared part again."""
+        for name, saved in arrays.items():
+            current = getattr(self, name)
+            if current.shape != saved.shape:
+                raise ValueError(f"{name} has shape {current.shape}, the copy {saved.shape}: another world's state")
+            current[...] = saved
+

@@ -525,6 +525,15 @@ class LQNGTracker:
         self._steer = steer
         return Action(steer, min(max(float(throttle), -1.0), 1.0))
 
+    @property
+    def last_steer(self) -> float:
+        """The steer last sent, from which ``steer_rate`` limits the next (the tracker's only memory)."""
+        return self._steer
+
+    @last_steer.setter
+    def last_steer(self, steer: float) -> None:
+        self._steer = steer
+
     def start_steering(self, observation: Observation, plan: Plan | None) -> float:
         """Take the steer the tracker asks for at ``observation`` as its last steer, with no rate limit, and return
         it: a tracker started mid-race (a planner's rollout, :mod:`controllers.rollout_check`) would otherwise

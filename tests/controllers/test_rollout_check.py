@@ -152,3 +152,25 @@ def test_a_search_with_the_check_is_the_registered_planner_underneath() -> None:
     assert isinstance(plain.planner, MCTSPlanner)  # type: ignore[attr-defined]
     assert checked.planner.check.settings.depth == 2  # type: ignore[attr-defined]
     assert checked.planner.inner.iterations == plain.planner.iterations  # type: ignore[attr-defined]
+
+
+def test_the_tree_of_rollouts_scores_every_candidate_as_racing_it_alone() -> None:
+    """Candidates sharing their first lanes are raced once up to where they part (the world copied there): each
+    score is the number racing that candidate from the start gives, to the last bit, in fewer steps."""
+    world = _raced_world(6.0)  # the first corner, the karts close: the rival is in reach
+    observation = observe(world, 0)[0]
+    check = _check(depth=3)
+    rival = check.rival(observation)
+    assert rival is not None
+    first = observation.me.checkpoints_passed + 1
+    plan = _plan(first, [LINE_LANES[(first + i) % TRACK.n_checkpoints] for i in range(6)])
+    plan = replace(plan, waypoints={**plan.waypoints, 1: _plan(first, [3, 3, 3, 3, 3, 3]).waypoints[0]})
+    target = plan.ego_waypoints[3].checkpoint + check.settings.settle
+    candidates = [(a, b, c) for a in (2, 4) for b in (3, 4) for c in (1, 4)]
+    tree = check.scores(observation, rival, plan, target, candidates)
+    tree_steps = check.counts.steps
+    alone = {lanes: check.score(observation, rival, check.with_lanes_plan(plan, lanes), target) for lanes in candidates}
+    assert list(tree) == candidates
+    assert tree == alone
+    assert len(set(alone.values())) > 1  # the lanes matter here: the test compares different races
+    assert tree_steps < 0.9 * (check.counts.steps - tree_steps)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from sim_core.track_io import get_track
 from sim_core.world import World
@@ -61,3 +62,27 @@ def test_same_seed_same_race() -> None:
         assert np.array_equal(runs[0][name], runs[1][name], equal_nan=True), name
     # and it did something: the karts moved and crossed checkpoints
     assert runs[0]["istate"][:, :, 1].max() > 0
+
+
+def test_a_restored_state_races_on_as_the_state_it_was_copied_from() -> None:
+    """Branching a race: copy the state half way, race on, put the copy back and race on again with the same
+    inputs: the same trajectory, every counter included; a copy of a world of another size is refused."""
+    world = World(get_track("complex"), 2, 2)
+    spread_start(world, 5)
+    actions = seeded_actions(5, 2, 2)
+    half = N_STEPS // 2
+    for t in range(half):
+        world.step(actions[t])
+    saved = world.state_arrays()
+    for t in range(half, N_STEPS):
+        world.step(actions[t])
+    first = world.state_arrays()
+    world.restore_state(saved)
+    for t in range(half, N_STEPS):
+        world.step(actions[t])
+    second = world.state_arrays()
+    assert all(np.array_equal(first[name], second[name], equal_nan=True) for name in first)
+    assert not np.array_equal(first["fstate"], saved["fstate"])
+    other = World(get_track("complex"), 1, 2)
+    with pytest.raises(ValueError, match="another world"):
+        other.restore_state(saved)
