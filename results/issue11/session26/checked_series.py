@@ -1,4 +1,4 @@
-"""A short series of mcts-lqng with ``rollout_check_depth`` against fixed-lqng as registered, as
+"""A short series of mcts-lqng with ``rollout_check_depth`` against fixed-lqng as registered (or ``--opponent``), as
 ``scripts/head_to_head.py`` runs the issue's series (seeds 0..N-1, or from ``--first-seed``; kart 0 from lane 2 on
 even seeds, lane 3 on odd ones), N races, W at a time. One JSON line per race, then a summary line.
 
@@ -16,11 +16,11 @@ from controllers.race import RaceSpec, run_race
 from controllers.registry import make_controller
 
 
-def race(args: tuple[str, int, int]) -> dict[str, object]:
-    track, seed, depth = args
+def race(args: tuple[str, int, int, str]) -> dict[str, object]:
+    track, seed, depth, opponent = args
     lanes = (2, 3) if seed % 2 == 0 else (3, 2)
-    spec = RaceSpec(track=track, controllers=("mcts-lqng", "fixed-lqng"), seed=seed, start_lanes=lanes)
-    drivers = [make_controller("mcts-lqng", rollout_check_depth=depth), make_controller("fixed-lqng")]
+    spec = RaceSpec(track=track, controllers=("mcts-lqng", opponent), seed=seed, start_lanes=lanes)
+    drivers = [make_controller("mcts-lqng", rollout_check_depth=depth), make_controller(opponent)]
     outcome = run_race(spec, drivers=drivers)
     karts = outcome.result.karts
     return {
@@ -42,8 +42,11 @@ def main() -> None:
     ap.add_argument("--depth", type=int, default=3)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--first-seed", type=int, default=0, help="seeds first-seed .. first-seed + races - 1")
+    ap.add_argument("--opponent", default="fixed-lqng", help="the other kart's registered controller")
     args = ap.parse_args()
-    jobs = [(args.track, seed, args.depth) for seed in range(args.first_seed, args.first_seed + args.races)]
+    jobs = [
+        (args.track, seed, args.depth, args.opponent) for seed in range(args.first_seed, args.first_seed + args.races)
+    ]
     rows = []
     with ProcessPoolExecutor(args.workers) as pool:
         for row in pool.map(race, jobs):
@@ -53,6 +56,7 @@ def main() -> None:
     by_lane = {lane: [r for r in rows if r["lanes"][0] == lane] for lane in (2, 3)}  # type: ignore[index]
     summary = {
         "track": args.track,
+        "opponent": args.opponent,
         "races": n,
         "depth": args.depth,
         "wins": sum(r["winner"] == 0 for r in rows),
