@@ -17,7 +17,7 @@ from controllers.base import Action, Controller, PlanningDriver, RaceContext
 from controllers.hierarchical import HierarchicalController
 from controllers.plan import Plan
 from controllers.race import RaceOutcome, RaceSpec, load_any_track, run_race
-from controllers.registry import make_controller, validate_parameters
+from controllers.registry import make_agent, validate_parameters
 from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import MCTSPlanner
 from sim_core.observation import Observation
@@ -93,7 +93,7 @@ def with_background_planner(agent: str) -> Controller:
     """``agent`` driving unchanged while the MCTS tactical planner (``mcts-rl``'s settings) plans for its kart in the
     background, so the referee measures its Δr and Δv against the plans, as the paper did for E2E. An agent that
     plans already is returned as it is."""
-    driver = make_controller(agent)
+    driver = make_agent(agent)
     if isinstance(driver, PlanningDriver):
         return driver
     settings = validate_parameters("mcts-rl", {})
@@ -104,7 +104,7 @@ def with_background_planner(agent: str) -> Controller:
 
 def job_drivers(job: RaceJob) -> list[Controller]:
     """The drivers of ``job``: registered controllers, those in ``background_planners`` with a background planner."""
-    return [with_background_planner(a) if a in job.background_planners else make_controller(a) for a in job.agents]
+    return [with_background_planner(a) if a in job.background_planners else make_agent(a) for a in job.agents]
 
 
 def run_job(job: RaceJob, record: bool = True) -> FinishedRace:

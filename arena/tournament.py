@@ -28,7 +28,7 @@ from arena.lifeline import die_with_parent
 from arena.race import FinishedRace, RaceJob, run_job
 from arena.records import RaceFigures
 from controllers.race import MAX_START_SPREAD, load_any_track
-from controllers.registry import controller_names
+from controllers.registry import controller_names, validate_agent
 
 log = logging.getLogger(__name__)
 
@@ -39,7 +39,8 @@ START_LANES = (2, 3)  # the original's two start lanes, swapped every other race
 
 @dataclass(frozen=True)
 class TournamentSpec:
-    """What a tournament races: agents (registry names), tracks, races per pair and track, and the race settings."""
+    """What a tournament races: agents (registered names, or names with parameters,
+    :func:`controllers.registry.parse_agent`), tracks, races per pair and track, and the race settings."""
 
     agents: tuple[str, ...]
     tracks: tuple[str, ...] = ("oval", "complex")
@@ -59,9 +60,18 @@ class TournamentSpec:
         """What is wrong with this spec, by field (empty: nothing)."""
         found: dict[str, str] = {}
         known = controller_names()
-        unknown = [a for a in self.agents if a not in known]
+        unknown, bad = [], []
+        for agent in self.agents:
+            try:
+                validate_agent(agent)
+            except KeyError:
+                unknown.append(agent)
+            except ValueError as error:  # a ParameterError too
+                bad.append(str(error))
         if unknown:
             found["agents"] = f"unknown agents {unknown}; known: {known}"
+        elif bad:
+            found["agents"] = "; ".join(bad)
         elif len(set(self.agents)) != len(self.agents) or len(self.agents) < 2:
             found["agents"] = f"give two or more different agents, got {list(self.agents)}"
         bad_tracks = []

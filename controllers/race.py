@@ -9,7 +9,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from controllers.base import Controller, PlanningDriver, RaceContext
-from controllers.registry import make_controller
+from controllers.registry import make_agent
 from controllers.replay import Replay, ReplayRecorder, apply_plan_targets
 from sim_core.laps import LapTimer
 from sim_core.observation import observe
@@ -95,7 +95,7 @@ def run_race(
     world = World(track, 1, n, params, laps=spec.laps)
     world.reset(start_lanes=spec.start_lanes)
     if drivers is None:
-        drivers = [make_controller(name) for name in spec.controllers]
+        drivers = [make_agent(name) for name in spec.controllers]
     elif len(drivers) != n:
         raise ValueError(f"{len(drivers)} drivers for {n} karts")
     for k, driver in enumerate(drivers):

@@ -38,6 +38,7 @@ Adding a controller
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from functools import partial
@@ -262,3 +263,39 @@ def make_controller(name: str, **overrides: object) -> Controller:
     """
     spec = controller_spec(name)
     return spec.factory_for(spec.validate(overrides))()
+
+
+# an agent is a registered name, or a name with parameters: ``mcts-lqng:rollout_check_depth=3:iterations=500``
+# (what tournaments and headless races take, where one string names a driver)
+AGENT_SEPARATOR = ":"
+
+
+def parse_agent(agent: str) -> tuple[str, dict[str, object]]:
+    """The controller name and parameter overrides of an agent string ``NAME[:KEY=VALUE]...``; each value is read
+    as JSON where it parses (``3``, ``0.5``, ``true``) and as text otherwise. ``ValueError`` for a part without
+    ``=`` or a key given twice (names and values are checked by :func:`validate_agent`)."""
+    name, *settings = agent.split(AGENT_SEPARATOR)
+    overrides: dict[str, object] = {}
+    for setting in settings:
+        key, equals, text = setting.partition("=")
+        if not equals or not key:
+            raise ValueError(f"agent {agent!r}: {setting!r} is not KEY=VALUE")
+        if key in overrides:
+            raise ValueError(f"agent {agent!r}: {key} is given twice")
+        try:
+            overrides[key] = json.loads(text)
+        except json.JSONDecodeError:
+            overrides[key] = text
+    return name, overrides
+
+
+def validate_agent(agent: str) -> None:
+    """Raise ``KeyError`` (unknown controller), :class:`ParameterError` or ``ValueError`` for a bad agent string."""
+    name, overrides = parse_agent(agent)
+    validate_parameters(name, overrides)
+
+
+def make_agent(agent: str) -> Controller:
+    """A new controller from an agent string (:func:`parse_agent`): ``make_controller(name, **overrides)``."""
+    name, overrides = parse_agent(agent)
+    return make_controller(name, **overrides)

@@ -85,7 +85,11 @@ def import_track(
 def race(
     track: Annotated[str, typer.Option(help="built-in track name, or a path to a track JSON")] = "oval",
     karts: Annotated[
-        str, typer.Option(help="comma-separated registered controllers, one per kart")
+        str,
+        typer.Option(
+            help="comma-separated registered controllers, one per kart; NAME:KEY=VALUE sets a parameter, e.g. "
+            "mcts-lqng:rollout_check_depth=3"
+        ),
     ] = "mcts-lqng,fixed-lqng",
     laps: Annotated[int | None, typer.Option(min=1, help="laps (default: the track's)")] = None,
     seed: Annotated[int, typer.Option(help="seed of the planners")] = 0,
@@ -98,13 +102,21 @@ def race(
     """Run a headless race between registered controllers and print the referee's result (karts numbered from
     1; --json: the API's result object, with ``winner`` and per-kart results, as the last line)."""
     from controllers.race import RaceSpec, run_race  # loaded on use (see the module docstring)
-    from controllers.registry import controller_names
+    from controllers.registry import controller_names, validate_agent
 
     names = tuple(n.strip() for n in karts.split(",") if n.strip())
-    unknown = [n for n in names if n not in controller_names()]
-    if unknown or not MIN_KARTS <= len(names) <= MAX_KARTS:
+    if not MIN_KARTS <= len(names) <= MAX_KARTS:
         error(f"give {MIN_KARTS}-{MAX_KARTS} of {controller_names()}, got {list(names)}")
         raise typer.Exit(2)
+    for name in names:
+        try:
+            validate_agent(name)
+        except KeyError:
+            error(f"unknown controller in {name!r}; known: {controller_names()} (NAME or NAME:KEY=VALUE:...)")
+            raise typer.Exit(2) from None
+        except ValueError as exc:
+            error(str(exc))
+            raise typer.Exit(2) from None
     try:
         lanes = tuple(int(x) for x in start_lanes.split(",")) if start_lanes else None
         spec = RaceSpec(track, names, laps, seed, lanes, kart, plan_latency)

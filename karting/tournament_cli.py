@@ -43,9 +43,9 @@ def open_tournaments(db: str) -> TournamentDatabase:
 
 @app.command()
 def run(
-    agents: Annotated[str, typer.Option(help="registered controllers, comma separated")] = (
-        "mcts-rl,e2e,fixed-rl,mcts-lqng,fixed-lqng"
-    ),
+    agents: Annotated[
+        str, typer.Option(help="registered controllers, comma separated; NAME:KEY=VALUE sets a parameter")
+    ] = ("mcts-rl,e2e,fixed-rl,mcts-lqng,fixed-lqng"),
     tracks: Annotated[str, typer.Option(help="tracks, comma separated")] = "oval,complex",
     races_per_pair: Annotated[int, typer.Option(min=1, help="races per pair and track")] = 50,
     seed: Annotated[int, typer.Option(help="the tournament's seed (every race's seed derives from it)")] = 0,

@@ -39,7 +39,11 @@ class TournamentIn(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    agents: list[Name] = Field(min_length=2, max_length=12, description="names from GET /api/controllers")
+    agents: list[Name] = Field(
+        min_length=2,
+        max_length=12,
+        description="names from GET /api/controllers, each optionally with parameters: NAME:KEY=VALUE:...",
+    )
     tracks: list[Name] = Field(default=["oval", "complex"], min_length=1, max_length=8)
     races_per_pair: int = Field(default=50, ge=1, le=MAX_RACES_PER_PAIR, description="per pair and track")
     seed: int = Field(default=0, ge=0, le=MAX_SEED)

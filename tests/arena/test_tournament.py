@@ -56,6 +56,24 @@ def test_a_spec_names_every_problem() -> None:
     assert "start_spread" in TournamentSpec(agents=("fixed-lqng", "e2e"), start_spread=2.5).problems()
 
 
+def test_an_agent_with_parameters_races_as_its_own_agent_with_them() -> None:
+    """``fixed-lqng:speed_scale=0.7`` is fixed-lqng driving at 70% of its speed targets: a different agent in the
+    tournament, which the same controller as registered beats on the line from either start lane."""
+    slow = "fixed-lqng:speed_scale=0.7"
+    spec = TournamentSpec(agents=("fixed-lqng", slow), tracks=("oval",), races_per_pair=2, laps=1, seed=3)
+    assert spec.problems() == {}
+    store = MemoryStore()
+    run_tournament(spec, store, "variants", backend="inline", record=False)
+    races = list(store.races["variants"].values())
+    assert len(races) == 2 and {r.job.agents for r in races} == {("fixed-lqng", slow)}
+    assert {r.job.start_lanes for r in races} == {(2, 3), (3, 2)}
+    assert all(r.result.winner == 0 for r in races)
+    wins = tournament_stats(store.figures("variants")).tracks["oval"].wins
+    assert wins == {"fixed-lqng": {slow: 2}, slow: {"fixed-lqng": 0}}
+    bad = TournamentSpec(agents=("fixed-lqng", "fixed-lqng:speed_scale=0.1")).problems()["agents"]
+    assert "'speed_scale' = 0.1 is below its minimum 0.5" in bad
+
+
 def test_a_spread_start_reaches_every_race_and_old_specs_read_back_without_one() -> None:
     spread = TournamentSpec(agents=("a", "b"), tracks=("oval",), races_per_pair=3, start_spread=0.25)
     jobs = spread.jobs()

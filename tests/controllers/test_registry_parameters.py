@@ -22,7 +22,10 @@ from controllers.registry import (
     ControllerSpec,
     controller_factory,
     controller_names,
+    make_agent,
     make_controller,
+    parse_agent,
+    validate_agent,
     validate_parameters,
 )
 from controllers.rl.tracker import RLTracker
@@ -250,3 +253,40 @@ def test_parameters_of_reads_types_and_bounds_from_the_fields() -> None:
     )
     with pytest.raises(ValueError, match="minimum 2 > maximum 1"):
         parameter(1, minimum=2, maximum=1)
+
+
+@pytest.mark.parametrize(
+    ("agent", "name", "overrides"),
+    [
+        ("mcts-lqng", "mcts-lqng", {}),
+        ("mcts-lqng:rollout_check_depth=3", "mcts-lqng", {"rollout_check_depth": 3}),
+        ("fixed-lqng:speed_scale=0.8:line_margin_m=1.5", "fixed-lqng", {"speed_scale": 0.8, "line_margin_m": 1.5}),
+        ("mcts-lqng:close_following=false", "mcts-lqng", {"close_following": False}),
+        ("x:label=fast", "x", {"label": "fast"}),  # not JSON: kept as text (the parameter's check judges it)
+    ],
+)
+def test_an_agent_string_is_a_name_and_its_parameters(agent: str, name: str, overrides: dict[str, object]) -> None:
+    assert parse_agent(agent) == (name, overrides)
+
+
+@pytest.mark.parametrize(
+    ("agent", "error", "says"),
+    [
+        ("schumacher", KeyError, "unknown controller"),
+        ("fixed-lqng:speed_scale", ValueError, "is not KEY=VALUE"),
+        ("fixed-lqng:=1", ValueError, "is not KEY=VALUE"),
+        ("fixed-lqng:speed_scale=0.8:speed_scale=0.9", ValueError, "given twice"),
+        ("fixed-lqng:speed_scale=fast", ParameterError, "must be a float"),
+        ("mcts-lqng:rollout_check_depth=4", ParameterError, "above its maximum"),
+    ],
+)
+def test_a_bad_agent_string_says_what_is_wrong(agent: str, error: type[Exception], says: str) -> None:
+    with pytest.raises(error, match=says):
+        validate_agent(agent)
+
+
+def test_an_agent_string_builds_the_controller_with_its_parameters() -> None:
+    checked = make_agent("mcts-lqng:rollout_check_depth=2")
+    assert checked.planner.check.settings.depth == 2  # type: ignore[attr-defined]
+    plain = make_agent("mcts-lqng")
+    assert not hasattr(plain.planner, "check")  # type: ignore[attr-defined]

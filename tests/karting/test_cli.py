@@ -108,6 +108,29 @@ def test_unknown_controllers_and_tracks_exit_with_2() -> None:
     assert unknown.exit_code == 2 and "nope" in unknown.output
     missing = runner.invoke(app, ["race", "--track", "no/such/track.json", "--karts", "lane-follower"])
     assert missing.exit_code == 2
+    bad = runner.invoke(app, ["race", "--karts", "lane-follower,fixed-lqng:speed_scale=3"])
+    assert bad.exit_code == 2 and "above its maximum" in bad.output
+
+
+def test_a_kart_given_parameters_races_with_them() -> None:
+    """``fixed-lqng:speed_scale=0.6`` drives at 60% of its speed targets: a lap of it takes longer."""
+    done = runner.invoke(
+        app,
+        [
+            "race",
+            "--track",
+            "train-oval-small",
+            "--karts",
+            "fixed-lqng,fixed-lqng:speed_scale=0.6",
+            "--laps",
+            "1",
+            "--json",
+        ],
+        env=NARROW,
+    )
+    assert done.exit_code == 0, done.output
+    karts = json.loads(done.output.strip().splitlines()[-1])["karts"]
+    assert karts[1]["finish_time"] > 1.2 * karts[0]["finish_time"]
 
 
 def test_a_centre_line_csv_imports_as_a_track_file(tmp_path: Path) -> None:
