@@ -16,9 +16,10 @@ collision at fault or illegal lane change in the rollout; the best replaces the 
 ``margin``. :class:`CheckedPlanner` puts the check behind an :class:`~controllers.tactical.high_level.MCTSPlanner`
 in the high-level slot.
 
-Its cost is the rollouts: every candidate is ``max_steps`` steps at most of two LQ trackers (about 0.1 s each on
-the 2-core machine), so an exhaustive check of depth 3 takes seconds, against 20-40 ms for the search. Off by
-default (``mcts-lqng``'s ``rollout_check_depth`` 0).
+Its cost is the rollouts: every candidate is ``max_steps`` steps at most of two LQ trackers. Candidates that share
+their first lanes are raced once up to where they part (:meth:`RolloutCheck.scores`), and an exhaustive check of
+depth 3 (64 candidates) takes about 2 s on the 2-core machine (``benchmarks/rollout_check.py``; 5.8 s before
+session 27), against 10-40 ms for the search. Off by default (``mcts-lqng``'s ``rollout_check_depth`` 0).
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ from sim_core.world import World
 ROLLOUT_CHECK_HELP = (
     "checkpoints after the next whose lanes are checked by racing every lane sequence a few seconds ahead in the "
     "simulator, the kart ahead modelled as fixed-lqng, when one is within 25 m or alongside (ours, not the "
-    "paper's; 0: off; 3 takes seconds of CPU per plan in traffic)"
+    "paper's; 0: off; 3 takes about 2 s of CPU per plan in traffic)"
 )
 
 # the kart ahead in a rollout: an LQ line follower tuned as the Fixed agents' (fixed-lqng's) tracker, on the lanes the

@@ -437,4 +437,3 @@ class World:
             if current.shape != saved.shape:
                 raise ValueError(f"{name} has shape {current.shape}, the copy {saved.shape}: another world's state")
             current[...] = saved
-
