@@ -1,7 +1,7 @@
 """One race of mcts-lqng (rollout check of depth 3, its settings overridden) against an opponent; one JSON line.
 
-Needs the check of ``rival_fit_experiment.patch`` (``git apply`` it first): its ``complete_rival`` and
-``fit_rival`` settings are what session 27 tried. For example, from the repo root:
+Any field of ``RolloutCheckSettings`` can be overridden. ``complete_rival`` and ``fit_rival``, which session 27 tried,
+need the check of ``rival_fit_experiment.patch`` (``git apply`` it first). For example, from the repo root:
 
     PYTHONPATH=$PWD .venv/bin/python results/issue11/session27/variant_race.py complex 0 fixed-lqng \
         '{"complete_rival": true, "fit_rival": false}'
@@ -36,8 +36,8 @@ row = {
     "checked": counts.checked,
     "changed": counts.changed,
     "rollouts": counts.rollouts,
-    "fits": counts.fits,
-    "other_model": counts.other_model,
+    "fits": getattr(counts, "fits", None),
+    "other_model": getattr(counts, "other_model", None),
     "wall": round(outcome.wall_seconds, 1),
 }
 print(json.dumps(row), flush=True)
