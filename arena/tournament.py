@@ -28,7 +28,7 @@ from arena.lifeline import die_with_parent
 from arena.race import FinishedRace, RaceJob, run_job
 from arena.records import RaceFigures
 from controllers.race import MAX_START_SPREAD, load_any_track
-from controllers.registry import controller_names, validate_agent
+from controllers.registry import controller_names, parse_agent, validate_agent
 
 log = logging.getLogger(__name__)
 
@@ -50,7 +50,8 @@ class TournamentSpec:
     time_limit: float | None = None  # [s] None: the rules' limit
     kart_preset: str = "paper"
     plan_latency: float = 0.1  # [s]
-    # agents without a planner given the MCTS planner in the background for their Δr / Δv (as the paper's E2E)
+    # controllers without a planner given the MCTS planner in the background for their Δr / Δv (as the paper's E2E),
+    # by name: an agent with parameters (``e2e:stall_recovery=false``) gets one too
     background_planners: tuple[str, ...] = ("e2e",)
     # [s] each kart launches after a delay drawn from its race's seed, uniform in [0, start_spread): races with a
     # spread, which a start lane alone does not decide (0: the paper's simultaneous starts)
@@ -119,7 +120,7 @@ class TournamentSpec:
                         self.time_limit,
                         self.kart_preset,
                         self.plan_latency,
-                        tuple(agent for agent in (a, b) if agent in self.background_planners),
+                        tuple(agent for agent in (a, b) if parse_agent(agent)[0] in self.background_planners),
                         self.start_spread,
                     )
                     jobs.append(job)

@@ -56,34 +56,40 @@ class RacingLine:
         """Lateral offset [m] of the line at centre-line progress ``s`` (periodic interpolation)."""
         length, s_closed, offset_closed, _ = self._closed
         if isinstance(s, float):
-            return _interp_at(s % length, self._lookup, 1)
+            return _interp_at(s % length, self._sample_s, *self._offset_table)
         return np.interp(np.mod(s, length), s_closed, offset_closed)
 
     def speed_at(self, s: float | np.ndarray) -> float | np.ndarray:
         """Speed [m/s] of the line's profile at centre-line progress ``s`` (periodic interpolation)."""
         length, s_closed, _, speed_closed = self._closed
         if isinstance(s, float):
-            return _interp_at(s % length, self._lookup, 2)
+            return _interp_at(s % length, self._sample_s, *self._speed_table)
         return np.interp(np.mod(s, length), s_closed, speed_closed)
 
+    # the LQ trackers look the line up a few times per kart and step, one point at a time, where np.interp's call
+    # costs more than the arithmetic: the closed samples as floats, and each segment's slope computed as np.interp
+    # computes it, so that a point gets the very same number
     @cached_property
-    def _lookup(self) -> tuple[list[float], ...]:
-        # the LQ trackers look the line up a few times per kart and step, one point at a time, where np.interp's
-        # call costs more than the arithmetic: the closed samples as floats and each segment's slopes (each
-        # computed as np.interp computes it, so a point gets the very same number)
-        _, s_closed, offset_closed, speed_closed = self._closed
-        xs = [float(v) for v in s_closed]
-        table: list[list[float]] = [xs]
-        for values in (offset_closed, speed_closed):
-            ys = [float(v) for v in values]
-            table += [ys, [(ys[i + 1] - ys[i]) / (xs[i + 1] - xs[i]) for i in range(len(xs) - 1)]]
-        return tuple(table)
+    def _sample_s(self) -> list[float]:
+        return [float(v) for v in self._closed[1]]
+
+    @cached_property
+    def _offset_table(self) -> tuple[list[float], list[float]]:
+        return _slopes(self._sample_s, self._closed[2])
+
+    @cached_property
+    def _speed_table(self) -> tuple[list[float], list[float]]:
+        return _slopes(self._sample_s, self._closed[3])
 
 
-def _interp_at(x: float, lookup: tuple[list[float], ...], column: int) -> float:
-    """np.interp(x, xs, ys) for one point, as numpy computes it: ``lookup`` is ``RacingLine._lookup``, ys its
-    entry ``2 * column - 1`` and the slopes the next."""
-    xs, ys, slopes = lookup[0], lookup[2 * column - 1], lookup[2 * column]
+def _slopes(xs: list[float], values: np.ndarray) -> tuple[list[float], list[float]]:
+    """``values`` as floats, and the slope of each segment between ``xs``."""
+    ys = [float(v) for v in values]
+    return ys, [(ys[i + 1] - ys[i]) / (xs[i + 1] - xs[i]) for i in range(len(xs) - 1)]
+
+
+def _interp_at(x: float, xs: list[float], ys: list[float], slopes: list[float]) -> float:
+    """np.interp(x, xs, ys) for one point, as numpy computes it (``slopes`` from :func:`_slopes`)."""
     j = bisect.bisect_right(xs, x) - 1
     if j < 0:
         return ys[0]
