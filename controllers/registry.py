@@ -62,6 +62,8 @@ from controllers.rl.agents import E2EParams, FixedRLParams, MCTSRLParams, build_
 from controllers.rollout_check import (
     RIVAL_TRACKING,
     ROLLOUT_CHECK_HELP,
+    ROLLOUT_CHECK_TRUST_HELP,
+    TRUST_MISS,
     CheckedPlanner,
     RolloutCheck,
     RolloutCheckSettings,
@@ -138,6 +140,7 @@ class MCTSLQNGParams:
     close_following: bool = parameter(True, CLOSE_FOLLOWING_HELP)
     grip_steer: float = parameter(0.0, GRIP_STEER_HELP, minimum=0.0, maximum=1.0)
     rollout_check_depth: int = parameter(0, ROLLOUT_CHECK_HELP, minimum=0, maximum=3)
+    rollout_check_trust_m: float = parameter(TRUST_MISS, ROLLOUT_CHECK_TRUST_HELP, unit="m", minimum=0.0, maximum=10.0)
 
 
 @dataclass(frozen=True)
@@ -162,7 +165,7 @@ def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
     tracking = replace(tracking, horizon=params.lqng_horizon_steps, grip_steer=params.grip_steer)
     planner: HighLevelPlanner = search
     if params.rollout_check_depth > 0:
-        settings = RolloutCheckSettings(depth=params.rollout_check_depth)
+        settings = RolloutCheckSettings(depth=params.rollout_check_depth, trust_miss=params.rollout_check_trust_m)
         planner = CheckedPlanner(search, RolloutCheck(settings, tracking, RIVAL_TRACKING))
     return HierarchicalController("mcts-lqng", planner, LQNGTracker(tracking))
 
