@@ -41,8 +41,8 @@ from sim_core.world import World
 
 ROLLOUT_CHECK_HELP = (
     "checkpoints after the next whose lanes are checked by racing every lane sequence a few seconds ahead in the "
-    "simulator, the kart ahead modelled as fixed-lqng, when one is within 25 m or alongside (ours, not the "
-    "paper's; 0: off; 3 takes about 2 s of CPU per plan in traffic)"
+    "simulator, the kart ahead modelled as fixed-lqng, when one is within 25 m or alongside and a racing-line "
+    "follower predicts it (ours, not the paper's; 0: off; 3 takes about 2 s of CPU per plan against such a kart)"
 )
 ROLLOUT_CHECK_TRUST_HELP = (
     "the check races a kart only while a racing-line follower predicts it, a second ahead, to within this "

@@ -29,6 +29,7 @@ from controllers.registry import (
     validate_parameters,
 )
 from controllers.rl.tracker import RLTracker
+from controllers.rollout_check import CheckedPlanner
 from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import MCTSPlanner
 from sim_core.observation import Observation
@@ -64,7 +65,8 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
         "own_pace": "1.0",
         "close_following": "True",
         "grip_steer": "0.0",
-        "rollout_check_depth": "0",
+        "rollout_check_depth": "3",
+        "rollout_check_trust_m": "0.15",
     }
     assert dict(REGISTRY["fixed-lqng"].parameters) == {
         "line_margin_m": "1.0",
@@ -84,11 +86,12 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
         hold_gain_s=0.2,
     )
     assert isinstance(driver, HierarchicalController)
-    assert isinstance(driver.planner, MCTSPlanner) and isinstance(driver.tracker, LQNGTracker)
-    assert driver.planner.iterations == 300 and driver.planner.params.horizon == 5
+    assert isinstance(driver.planner, CheckedPlanner) and isinstance(driver.tracker, LQNGTracker)
+    search = driver.planner.inner  # the search behind the rollout check (on by default since session 28)
+    assert search.iterations == 300 and search.params.horizon == 5
     assert driver.planner.rate_hz == 2.0 and isinstance(driver.planner.rate_hz, float)
     assert driver.tracker.params.horizon == 6
-    assert driver.planner.deviation_gain == 0.3 and driver.planner.hold_gain == 0.2
+    assert search.deviation_gain == 0.3 and search.hold_gain == 0.2
     assert driver.tracker.params == dataclasses.replace(CLOSE_FOLLOWING_TRACKING, horizon=6)  # close following
     linear = make_controller("mcts-lqng", close_following=False, lqng_horizon_steps=6)
     assert isinstance(linear, HierarchicalController) and isinstance(linear.tracker, LQNGTracker)
@@ -98,9 +101,9 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
     assert isinstance(gripping, HierarchicalController) and isinstance(gripping.tracker, LQNGTracker)
     assert gripping.tracker.params == dataclasses.replace(CLOSE_FOLLOWING_TRACKING, grip_steer=0.98)
     searched = make_controller("mcts-lqng", racing_line_default=False)
-    assert isinstance(searched, HierarchicalController) and isinstance(searched.planner, MCTSPlanner)
-    assert searched.planner.deviation_gain is None  # the search's lanes, as mcts-rl's by default
-    assert searched.planner.hold_gain is None  # nothing to hold without the racing line
+    assert isinstance(searched, HierarchicalController) and isinstance(searched.planner, CheckedPlanner)
+    assert searched.planner.inner.deviation_gain is None  # the search's lanes, as mcts-rl's by default
+    assert searched.planner.inner.hold_gain is None  # nothing to hold without the racing line
     rl = make_controller("mcts-rl")
     assert isinstance(rl, HierarchicalController) and isinstance(rl.planner, MCTSPlanner)
     assert rl.planner.deviation_gain == 0.1  # the racing line unless the search gains, as mcts-lqng's
@@ -108,9 +111,9 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
     assert rl.planner.pace_model and rl.planner.own_pace == 1.0  # every kart at its measured pace
     assert not rl.planner.planned_speeds_behind  # its following shield keeps the distance
     paced = make_controller("mcts-lqng", own_pace=1.05)
-    assert isinstance(paced, HierarchicalController) and isinstance(paced.planner, MCTSPlanner)
-    assert paced.planner.pace_model and paced.planner.own_pace == 1.05  # measured paces by default
-    unpaced = make_controller("mcts-lqng", pace_model=False)
+    assert isinstance(paced, HierarchicalController) and isinstance(paced.planner, CheckedPlanner)
+    assert paced.planner.inner.pace_model and paced.planner.inner.own_pace == 1.05  # measured paces by default
+    unpaced = make_controller("mcts-lqng", pace_model=False, rollout_check_depth=0)
     assert isinstance(unpaced, HierarchicalController) and isinstance(unpaced.planner, MCTSPlanner)
     assert not unpaced.planner.pace_model
     slowed = make_controller("fixed-lqng", speed_scale=0.9)
@@ -137,8 +140,12 @@ def test_defaults_build_the_tuned_drivers() -> None:
     default = make_controller("mcts-lqng")
     assert isinstance(default, HierarchicalController) and isinstance(default.tracker, LQNGTracker)
     assert default.tracker.params == CLOSE_FOLLOWING_TRACKING  # close following, since session 22
-    assert isinstance(default.planner, MCTSPlanner) and default.planner.params == GameParams()
-    assert (default.planner.iterations, default.planner.rate_hz) == (2000, 1.0)
+    # the search, behind the rollout check gated on a racing-line follower's misses (the default since session 28)
+    assert isinstance(default.planner, CheckedPlanner)
+    assert (default.planner.check.settings.depth, default.planner.check.settings.trust_miss) == (3, 0.15)
+    search = default.planner.inner
+    assert isinstance(search, MCTSPlanner) and search.params == GameParams()
+    assert (search.iterations, search.rate_hz) == (2000, 1.0)
     fixed = make_controller("fixed-lqng")
     assert isinstance(fixed, HierarchicalController) and isinstance(fixed.tracker, LQNGTracker)
     assert fixed.tracker.params == FIXED_LINE_TRACKING
@@ -211,8 +218,8 @@ def test_a_switch_takes_true_or_false_only() -> None:
 def test_a_validated_factory_pickles_for_the_worker_processes() -> None:
     params = validate_parameters("mcts-lqng", {"iterations": 100})
     driver = pickle.loads(pickle.dumps(controller_factory("mcts-lqng", params)))()
-    assert isinstance(driver, HierarchicalController) and isinstance(driver.planner, MCTSPlanner)
-    assert driver.planner.iterations == 100
+    assert isinstance(driver, HierarchicalController) and isinstance(driver.planner, CheckedPlanner)
+    assert driver.planner.inner.iterations == 100
     for name in controller_names():
         assert pickle.loads(pickle.dumps(REGISTRY[name].factory))().name == name
 
@@ -288,5 +295,6 @@ def test_a_bad_agent_string_says_what_is_wrong(agent: str, error: type[Exception
 def test_an_agent_string_builds_the_controller_with_its_parameters() -> None:
     checked = make_agent("mcts-lqng:rollout_check_depth=2")
     assert checked.planner.check.settings.depth == 2  # type: ignore[attr-defined]
-    plain = make_agent("mcts-lqng")
+    plain = make_agent("mcts-lqng:rollout_check_depth=0")
     assert not hasattr(plain.planner, "check")  # type: ignore[attr-defined]
+    assert make_agent("mcts-lqng").planner.check.settings.depth == 3  # type: ignore[attr-defined]

@@ -141,13 +141,14 @@ def test_the_checked_planner_holds_the_inside_of_the_first_corner_and_passes() -
     assert result_faults.changed >= 1
 
     crossings.clear()
-    run_race(spec, drivers=[make_controller("mcts-lqng"), make_controller("fixed-lqng")], on_step=record)
+    plain = make_controller("mcts-lqng", rollout_check_depth=0)
+    run_race(spec, drivers=[plain, make_controller("fixed-lqng")], on_step=record)
     assert crossings[(0, 10)][1] > crossings[(1, 10)][1]  # without the check it is still behind there
 
 
 def test_a_search_with_the_check_is_the_registered_planner_underneath() -> None:
     checked = make_controller("mcts-lqng", rollout_check_depth=2)
-    plain = make_controller("mcts-lqng")
+    plain = make_controller("mcts-lqng", rollout_check_depth=0)
     assert isinstance(checked.planner, CheckedPlanner)  # type: ignore[attr-defined]
     assert isinstance(plain.planner, MCTSPlanner)  # type: ignore[attr-defined]
     assert checked.planner.check.settings.depth == 2  # type: ignore[attr-defined]
@@ -174,3 +175,67 @@ def test_the_tree_of_rollouts_scores_every_candidate_as_racing_it_alone() -> Non
     assert tree == alone
     assert len(set(alone.values())) > 1  # the lanes matter here: the test compares different races
     assert tree_steps < 0.9 * (check.counts.steps - tree_steps)
+
+
+def _gated_race(opponent: str, seconds: float, trust: float = 0.15) -> tuple[RolloutCheck, list[float]]:
+    """A lane-2 start on complex of mcts-lqng (a depth-1 check gated at ``trust``) against ``opponent``, stopped
+    after ``seconds``: the check and the finish-line-free race's last positions (x, y per kart)."""
+    spec = RaceSpec("complex", ("mcts-lqng", opponent), seed=0, start_lanes=(2, 3), time_limit=seconds)
+    checked = make_controller("mcts-lqng", rollout_check_depth=1, rollout_check_trust_m=trust)
+    end: list[float] = []
+
+    def last(world: World, drivers: object, step: int) -> None:
+        end[:] = [float(v) for v in world.positions[0].ravel()]
+
+    run_race(spec, drivers=[checked, make_controller(opponent)], on_step=last)
+    return checked.planner.check, end  # type: ignore[attr-defined]
+
+
+def test_the_gate_trusts_a_line_follower_and_not_a_kart_on_a_line_of_its_own() -> None:
+    """The follower (fixed-lqng's planner and tracker) predicts fixed-lqng a second ahead to a few centimetres,
+    so the check races it; a lane follower, which keeps its start lane, it misses by far more, and the check
+    leaves every plan against it alone."""
+    check, _ = _gated_race("fixed-lqng", 10.0)
+    misses = [miss for _, kart, miss in check.counts.misses if kart == 1]
+    assert len(misses) >= 8  # one per plan after the first
+    assert float(np.median(misses)) < 0.05 and check.trusts(1)
+    assert check.counts.checked >= 5 and check.counts.untrusted == 1  # only the first plan: nothing measured yet
+
+    check, _ = _gated_race("lane-follower", 10.0)
+    misses = [miss for _, kart, miss in check.counts.misses if kart == 1]
+    assert float(np.median(misses)) > 0.3 and not check.trusts(1)
+    assert check.counts.checked == 0 and check.counts.untrusted >= 5
+
+
+def test_a_kart_the_gate_does_not_trust_races_as_without_the_check() -> None:
+    """Against a kart it does not trust the check changes nothing: the race is the search's alone, to the bit."""
+    _, gated = _gated_race("lane-follower", 10.0)
+    spec = RaceSpec("complex", ("mcts-lqng", "lane-follower"), seed=0, start_lanes=(2, 3), time_limit=10.0)
+    plain: list[float] = []
+    run_race(
+        spec,
+        drivers=[make_controller("mcts-lqng"), make_controller("lane-follower")],
+        on_step=lambda world, drivers, step: plain.__setitem__(
+            slice(None), [float(v) for v in world.positions[0].ravel()]
+        ),
+    )
+    assert gated == plain
+
+
+def test_the_gate_races_nobody_before_it_has_measured_them() -> None:
+    """At the start nothing is measured: side by side on the grid the plan is sent as searched, no rollout raced;
+    without the gate (trust 0) the same kart is raced at once."""
+    world = World(TRACK, 1, 2, SimParams(kart=PAPER_KART), sensors=False)
+    world.reset(start_lanes=(2, 3))
+    observation = observe(world, 0)[0]
+    plan = _plan(1, [2, 2, 3, 4, 4])
+    plan = replace(plan, waypoints={**plan.waypoints, 1: _plan(1, [3, 3, 3, 3, 3]).waypoints[0]})
+    gated = RolloutCheck(RolloutCheckSettings(depth=2, trust_miss=0.15), CLOSE_FOLLOWING_TRACKING, RIVAL_TRACKING)
+    gated.reset(CONTEXT)
+    assert gated.check(observation, plan, LINE_LANES, TRACK.lane_change_limit) is plan
+    assert (gated.counts.untrusted, gated.counts.checked, gated.counts.rollouts) == (1, 0, 0)
+    ungated = _check(depth=2)
+    ungated.check(observation, plan, LINE_LANES, TRACK.lane_change_limit)
+    assert ungated.counts.checked == 1 and ungated.counts.rollouts > 1
+    with pytest.raises(ValueError):
+        RolloutCheckSettings(trust_miss=-0.1)
