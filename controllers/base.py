@@ -69,6 +69,15 @@ class Tracker(Protocol):
 
 
 @runtime_checkable
+class TimeBoundedPlanner(Protocol):
+    """A high-level planner that can cut a plan short to a wall-clock budget. A live host sets
+    ``plan_budget_s`` so that a plan arrives while it is still worth driving; headless races leave it ``None``
+    and every plan is whole and deterministic."""
+
+    plan_budget_s: float | None  # [s] wall-clock seconds one plan may take (None: no limit)
+
+
+@runtime_checkable
 class PlanningDriver(Protocol):
     """A driver that plans off the tick: a high-level planner at its own (slow) rate and a tracker at the
     simulation rate. Hosts ask this capability instead of a concrete class: headless races plan in line

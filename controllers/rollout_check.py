@@ -25,6 +25,7 @@ session 27), against 10-40 ms for the search. Off by default (``mcts-lqng``'s ``
 from __future__ import annotations
 
 import itertools
+import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -97,6 +98,7 @@ class CheckCounts:
     untrusted: int = 0  # plans with a kart in reach that the check left alone: its model missed that kart
     misses: list[tuple[float, int, float]] = field(default_factory=list)  # (time [s], kart, miss [m]) per plan
     changed_at: list[float] = field(default_factory=list)  # race times [s] of the plans the check changed
+    cut: int = 0  # candidates left unscored because a plan's wall-clock budget ran out (live races only)
 
 
 class RolloutCheck:
@@ -113,6 +115,7 @@ class RolloutCheck:
         self._previous: tuple[Observation, Plan] | None = None  # the last plan's observation and the plan sent
         self._misses: dict[int, list[float]] = {}  # per other kart: the model's misses [m], oldest first
         self._follower = FixedLinePlanner()  # the racing-line follower that measures how the other karts drive
+        self.deadline: float | None = None  # time.perf_counter() after which no new branch is raced (None: none)
 
     def reset(self, context: RaceContext) -> None:
         """A private two-kart world on the race's track (no sensors) and the two trackers the rollouts drive."""
@@ -295,12 +298,14 @@ class RolloutCheck:
         numbers as racing each candidate alone (a test checks it), at about three quarters of the steps.
 
         Exact only while the rival's tracker does not look past the ego's next two waypoints
-        (``pass_on_prediction`` reads the ego's lanes where the rival is): such settings race each alone."""
+        (``pass_on_prediction`` reads the ego's lanes where the rival is): such settings race each alone.
+
+        Past :attr:`deadline` no new branch is raced but the one of the search's own lanes (the first candidate):
+        the candidates left unscored are missing from the result."""
         if self.rival_tracking.pass_distance > 0.0 and self.rival_tracking.pass_on_prediction:
             return {
                 lanes: self.score(observation, rival, self.with_lanes_plan(plan, lanes), target) for lanes in candidates
             }
-        self.counts.rollouts += len(candidates)
         waypoints = plan.ego_waypoints
         found: dict[tuple[int, ...], float] = {}
 
@@ -309,6 +314,9 @@ class RolloutCheck:
             for lanes in group:
                 branches.setdefault(lanes[: shared + 1], []).append(lanes)
             for members in branches.values():
+                if self._past_deadline() and candidates[0] not in members:
+                    self.counts.cut += len(members)
+                    continue
                 candidate = self.with_lanes_plan(plan, members[0])
                 rollout = self._begin(observation, rival, candidate) if saved is None else self._restore(saved)
                 last = shared + 1 == len(members[0])
@@ -321,7 +329,11 @@ class RolloutCheck:
                     explore(members, shared + 1, self._save(rollout))
 
         explore(candidates, 0, None)
-        return {lanes: found[lanes] for lanes in candidates}
+        self.counts.rollouts += len(found)
+        return {lanes: found[lanes] for lanes in candidates if lanes in found}
+
+    def _past_deadline(self) -> bool:
+        return self.deadline is not None and time.perf_counter() > self.deadline
 
     def with_lanes_plan(self, plan: Plan, lanes: tuple[int, ...]) -> Plan:
         """``plan`` with its ego's window lanes set to ``lanes`` (:meth:`with_lanes`)."""
@@ -400,6 +412,9 @@ class CheckedPlanner:
         self.inner = inner
         self.check = check
         self.rate_hz = inner.rate_hz
+        # a live host's wall-clock budget per plan (:class:`~controllers.base.TimeBoundedPlanner`): once spent, the
+        # check races no further branch of candidates. None (headless): every plan whole, deterministic
+        self.plan_budget_s: float | None = None
 
     def reset(self, context: RaceContext) -> None:
         """Reset the search and the check."""
@@ -407,7 +422,9 @@ class CheckedPlanner:
         self.check.reset(context)
 
     def plan(self, observation: Observation) -> Plan:
-        """The search's plan, checked."""
+        """The search's plan, checked (within ``plan_budget_s`` of wall-clock time when set, plus one branch)."""
+        budget = self.plan_budget_s
+        self.check.deadline = None if budget is None else time.perf_counter() + budget
         plan = self.check.check(observation, self.inner.plan(observation), self.inner.line_lanes, self.inner.lane_limit)
         self.inner.commit(plan)
         return plan

@@ -88,7 +88,7 @@ def race(
         str,
         typer.Option(
             help="comma-separated registered controllers, one per kart; NAME:KEY=VALUE sets a parameter, e.g. "
-            "mcts-lqng:rollout_check_depth=3"
+            "mcts-lqng:rollout_check_depth=0 (the search alone)"
         ),
     ] = "mcts-lqng,fixed-lqng",
     laps: Annotated[int | None, typer.Option(min=1, help="laps (default: the track's)")] = None,

@@ -105,10 +105,13 @@ FromHost = Ready | Failed | ActionOut | Error
 @dataclass(frozen=True)
 class PlannerSetup:
     """How a worker builds one kart's planner: the controller factory (the registry's zero-argument factory of
-    the request's parameters, picklable) whose ``.planner`` it uses, and the race context to reset it with."""
+    the request's parameters, picklable) whose ``.planner`` it uses, the race context to reset it with, and the
+    wall-clock budget per plan of a planner that can cut a plan short (:class:`~controllers.base.TimeBoundedPlanner`;
+    None: no limit)."""
 
     factory: Callable[[], Controller]
     context: RaceContext
+    plan_budget_s: float | None = None  # [s]
 
 
 @dataclass(frozen=True)

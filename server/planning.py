@@ -21,7 +21,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from arena.lifeline import die_with_parent
-from controllers.base import HighLevelPlanner, PlanningDriver
+from controllers.base import HighLevelPlanner, PlanningDriver, TimeBoundedPlanner
 from controllers.plan import Plan
 from server.controller_params import build_controller
 from server.host_messages import ClosePlanners, OpenPlanner, PlannerSetup, RequestPlan, ToPlanner, WarmPlanner
@@ -49,6 +49,8 @@ def _build(key: str, setup: PlannerSetup) -> HighLevelPlanner:
     if not isinstance(driver, PlanningDriver):
         raise TypeError(f"{driver.name} does not plan off the tick: no planner to build")
     planner = driver.planner
+    if isinstance(planner, TimeBoundedPlanner):
+        planner.plan_budget_s = setup.plan_budget_s
     planner.reset(setup.context)
     _planners[key] = planner
     return planner

@@ -240,7 +240,7 @@ class RaceSession:
             else:
                 self._workers[d.index] = DriverThread(d, contexts[d.index], f"race-{self.id}-kart{d.index}")
             if d.planning is not None:
-                setup = PlannerSetup(factory, contexts[d.index])
+                setup = PlannerSetup(factory, contexts[d.index], self.settings.plan_budget_s)
                 opening.append(self._plans.open(d, setup, self.settings.controller_reset_s))
         await asyncio.gather(self._open_scene(), *opening)
         while any(w.resetting for w in self._workers.values()) and self._stop_status is None:

@@ -58,6 +58,11 @@ class Settings(BaseSettings):
         default=1.0, gt=0.0, description="[s] wall time after which an unanswered controller call is hung"
     )
     controller_reset_s: float = Field(default=20.0, gt=0.0, description="[s] wall time allowed for a driver's reset")
+    plan_budget_s: float = Field(
+        default=0.3,
+        gt=0.0,
+        description="[s] wall time a planner that can cut a plan short (mcts-lqng's rollout check) spends on one",
+    )
     plan_timeout_s: float = Field(
         default=10.0, gt=0.0, description="[s] wall time after which a plan request is given up"
     )

@@ -4,6 +4,7 @@ of complex it finds the inside pass that the search alone never takes (results/i
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -11,7 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as hs
 
-from controllers.base import RaceContext
+from controllers.base import RaceContext, TimeBoundedPlanner
 from controllers.lq.tracker import CLOSE_FOLLOWING_TRACKING
 from controllers.plan import Plan, Waypoint
 from controllers.race import RaceSpec, run_race
@@ -239,3 +240,41 @@ def test_the_gate_races_nobody_before_it_has_measured_them() -> None:
     assert ungated.counts.checked == 1 and ungated.counts.rollouts > 1
     with pytest.raises(ValueError):
         RolloutCheckSettings(trust_miss=-0.1)
+
+
+def test_past_its_deadline_the_check_races_only_the_search_s_own_lanes() -> None:
+    """A live host's budget spent (the deadline passed before the check began): of the candidates only the search's
+    own lanes are raced, to the same score as without a deadline, and the rest are counted as cut; the checked
+    planner then sends the search's plan."""
+    world = _raced_world(6.0)
+    observation = observe(world, 0)[0]
+    first = observation.me.checkpoints_passed + 1
+    plan = _plan(first, [LINE_LANES[(first + i) % TRACK.n_checkpoints] for i in range(6)])
+    plan = replace(plan, waypoints={**plan.waypoints, 1: _plan(first, [3, 3, 3, 3, 3, 3]).waypoints[0]})
+    check = _check(depth=3)
+    rival = check.rival(observation)
+    assert rival is not None
+    target = plan.ego_waypoints[3].checkpoint + check.settings.settle
+    candidates = check.candidates(plan, observation.me, LINE_LANES, TRACK.lane_change_limit)
+    whole = check.scores(observation, rival, plan, target, candidates)
+    assert len(whole) == len(candidates) > 8 and check.counts.cut == 0
+    check.deadline = time.perf_counter() - 1.0
+    cut = check.scores(observation, rival, plan, target, candidates)
+    assert cut == {candidates[0]: whole[candidates[0]]}
+    assert check.counts.cut == len(candidates) - 1
+    assert check.check(observation, plan, LINE_LANES, TRACK.lane_change_limit) is plan
+
+
+def test_the_checked_planner_keeps_to_a_live_budget() -> None:
+    """With ``plan_budget_s`` set (a live host's :class:`TimeBoundedPlanner` capability) the check stops racing new
+    branches once the budget is spent; without it (headless) every candidate is raced."""
+    observation = observe(_raced_world(6.0), 0)[0]
+    for budget, cut in ((None, False), (0.0, True)):
+        driver = make_controller("mcts-lqng", rollout_check_trust_m=0.0)  # the gate off: raced at once
+        planner = driver.planner  # type: ignore[attr-defined]
+        assert isinstance(planner, TimeBoundedPlanner) and planner.plan_budget_s is None
+        planner.plan_budget_s = budget
+        planner.reset(CONTEXT)
+        planner.plan(observation)
+        counts = planner.check.counts
+        assert counts.checked == 1 and (counts.cut > 0) == cut, counts

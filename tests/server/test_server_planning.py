@@ -80,3 +80,49 @@ def test_plans_survive_a_dead_and_a_hung_worker() -> None:
             await asyncio.to_thread(pool.shutdown)
 
     asyncio.run(scenario())
+
+
+class BudgetEchoPlanner:
+    """A planner that can cut its plans short (``TimeBoundedPlanner``): its plan reports the budget it was given
+    as its ``seconds``."""
+
+    rate_hz = 1.0
+
+    def __init__(self) -> None:
+        self.plan_budget_s: float | None = None
+
+    def reset(self, context: RaceContext) -> None:
+        """Nothing to prepare."""
+
+    def plan(self, observation: Observation) -> Plan:
+        """An empty plan carrying the budget."""
+        return Plan(observation.ego, 0, {}, 0, 0, -1.0 if self.plan_budget_s is None else self.plan_budget_s)
+
+
+def budget_echo_controller() -> HierarchicalController:
+    """A module-level factory: the worker process imports it by name."""
+    return HierarchicalController("budget-echo", BudgetEchoPlanner(), LQNGTracker())  # type: ignore[arg-type]
+
+
+def test_a_time_bounded_planner_gets_the_live_budget_in_its_worker() -> None:
+    """The setup's wall-clock budget reaches a planner that can cut its plans short, in the worker process;
+    planners without the capability (fixed-lqng's) are built as before."""
+    track = get_track("oval")
+    params = SimParams()
+    world = World(track, 1, 2, params, laps=1)
+    observation = observe(world, 0)[0]
+    context = RaceContext(track, params.kart, 0, 2, world.lane_change_limit, 0)
+
+    async def scenario() -> None:
+        pool = PlannerPool(1)
+        try:
+            await pool.open("race/1", PlannerSetup(budget_echo_controller, context, 0.25))
+            assert (await pool.plan("race/1", observation)).seconds == 0.25
+            await pool.open("race/2", PlannerSetup(budget_echo_controller, context))
+            assert (await pool.plan("race/2", observation)).seconds == -1.0  # no budget: headless
+            await pool.open("race/3", PlannerSetup(REGISTRY["fixed-lqng"].factory, context, 0.25))
+            assert len((await pool.plan("race/3", observation)).ego_waypoints) == 8
+        finally:
+            await asyncio.to_thread(pool.shutdown)
+
+    asyncio.run(scenario())
