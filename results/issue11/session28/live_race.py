@@ -35,17 +35,19 @@ async def main(budget: str) -> None:
         command = [sys.executable, "-m", "karting", "serve", "--port", str(port), "--db", f"{tmp}/live.db"]
         server = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
         try:
-            async with httpx.AsyncClient(base_url=f"http://127.0.0.1:{port}/api", timeout=60) as client:
-                await wait_up(client, server)
-                race = (await client.post("/races", json=RACE)).json()
+            async with httpx.AsyncClient(base_url=f"http://127.0.0.1:{port}", timeout=60) as client:
+                print(f"server up in {await wait_up(client, server):.1f} s", file=sys.stderr, flush=True)
+                race = (await client.post("/api/races", json=RACE)).json()
+                print(race, file=sys.stderr, flush=True)
                 started = time.monotonic()
                 detail = {}
                 while time.monotonic() - started < 400:
-                    detail = (await client.get(f"/races/{race['id']}")).json()
+                    detail = (await client.get(f"/api/races/{race['id']}")).json()
+                    print(detail["status"], detail.get("step"), file=sys.stderr, flush=True)
                     if detail["status"] not in ("starting", "running"):
                         break
                     await asyncio.sleep(2.0)
-                result = (await client.get(f"/races/{race['id']}/result")).json()
+                result = (await client.get(f"/api/races/{race['id']}/result")).json()
                 row = {
                     "budget_s": float(budget),
                     "status": detail["status"],
