@@ -78,6 +78,11 @@ class RolloutCheckSettings:
     # by 0.2-4 m (results/issue11/session28/README.md). See :meth:`RolloutCheck.trusts`
     trust_miss: float = 0.0
     trust_samples: int = 3
+    # [s] the plan is applied this long after the observation it answers: the rollouts first race the plan sent
+    # before for that long, then the candidates. Headless races apply plans 0.1 s after they are asked for and the
+    # series were won with 0 here; at 0.3 s of delay and 0 here the lane-2 start on complex was lost
+    # (results/issue11/session28/README.md). A live host's budget (CheckedPlanner.plan_budget_s) replaces it
+    lead_s: float = 0.0
 
     def __post_init__(self) -> None:
         if self.depth < 1 or self.settle < 0 or self.max_steps < 1:
@@ -116,6 +121,8 @@ class RolloutCheck:
         self._misses: dict[int, list[float]] = {}  # per other kart: the model's misses [m], oldest first
         self._follower = FixedLinePlanner()  # the racing-line follower that measures how the other karts drive
         self.deadline: float | None = None  # time.perf_counter() after which no new branch is raced (None: none)
+        self.lead_s = settings.lead_s  # [s] see RolloutCheckSettings.lead_s
+        self._sent: Plan | None = None  # the plan sent at the previous check
 
     def reset(self, context: RaceContext) -> None:
         """A private two-kart world on the race's track (no sensors) and the two trackers the rollouts drive."""
@@ -128,6 +135,7 @@ class RolloutCheck:
         self.counts = CheckCounts()
         self._previous = None
         self._misses = {}
+        self._sent = None
         self._follower.reset(context)
 
     def measure(self, observation: Observation) -> None:
@@ -360,7 +368,21 @@ class RolloutCheck:
         checked = self._checked(observation, plan, line_lanes, lane_limit)
         if self.settings.trust_miss > 0.0:
             self._previous = (observation, checked)
+        self._sent = checked
         return checked
+
+    def ahead(self, observation: Observation, rival: KartView, sent: Plan, steps: int) -> Observation:
+        """``observation`` with the ego and ``rival`` raced ``steps`` on, both on ``sent`` (the plan the ego drives
+        until the new one arrives); the other karts as they were."""
+        assert self._world is not None, "reset() first"
+        rollout = self._begin(observation, rival, sent)
+        self._advance(sent, rollout, 1 << 30, None, limit=steps)
+        views = observe(self._world, 0)
+        karts = {k.index: k for k in observation.karts}
+        karts[observation.ego] = replace(views[0].me, index=observation.ego)
+        karts[rival.index] = replace(views[1].me, index=rival.index)
+        ordered = tuple(karts[k.index] for k in observation.karts)
+        return replace(observation, time=observation.time + steps * DT, karts=ordered)
 
     def _checked(self, observation: Observation, plan: Plan, line_lanes: tuple[int, ...], lane_limit: int) -> Plan:
         self.counts.plans += 1
@@ -374,7 +396,11 @@ class RolloutCheck:
         self.counts.checked += 1
         target = waypoints[self.settings.depth].checkpoint + self.settings.settle
         candidates = self.candidates(plan, observation.me, line_lanes, lane_limit)
-        scores = self.scores(observation, rival, plan, target, candidates)
+        start, lead = observation, round(self.lead_s / DT)
+        if lead > 0 and self._sent is not None:
+            start = self.ahead(observation, rival, self._sent, lead)
+            rival = next(k for k in start.karts if k.index == rival.index)
+        scores = self.scores(start, rival, plan, target, candidates)
         searched = candidates[0]
         best = max(scores, key=lambda lanes: scores[lanes])
         if scores[best] < scores[searched] + self.settings.margin:
@@ -425,6 +451,7 @@ class CheckedPlanner:
         """The search's plan, checked (within ``plan_budget_s`` of wall-clock time when set, plus one branch)."""
         budget = self.plan_budget_s
         self.check.deadline = None if budget is None else time.perf_counter() + budget
+        self.check.lead_s = self.check.settings.lead_s if budget is None else budget
         plan = self.check.check(observation, self.inner.plan(observation), self.inner.line_lanes, self.inner.lane_limit)
         self.inner.commit(plan)
         return plan

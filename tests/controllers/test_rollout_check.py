@@ -278,3 +278,22 @@ def test_the_checked_planner_keeps_to_a_live_budget() -> None:
         planner.plan(observation)
         counts = planner.check.counts
         assert counts.checked == 1 and (counts.cut > 0) == cut, counts
+
+
+def test_a_delayed_plan_is_checked_from_where_the_karts_will_be_when_it_arrives() -> None:
+    """``ahead`` races the ego and the kart ahead on the plan sent before for the delay: the same karts (by index),
+    each on by about its speed times the delay, and the time moved on; no delay, the same observation."""
+    observation = observe(_raced_world(6.0), 0)[0]
+    first = observation.me.checkpoints_passed + 1
+    plan = _plan(first, [LINE_LANES[(first + i) % TRACK.n_checkpoints] for i in range(6)])
+    plan = replace(plan, waypoints={**plan.waypoints, 1: _plan(first, [3, 3, 3, 3, 3, 3]).waypoints[0]})
+    check = _check(depth=3)
+    rival = check.rival(observation)
+    assert rival is not None
+    later = check.ahead(observation, rival, plan, 15)
+    assert later.time == pytest.approx(observation.time + 0.3) and later.ego == observation.ego
+    assert [k.index for k in later.karts] == [k.index for k in observation.karts]
+    for before, after in zip(observation.karts, later.karts, strict=True):
+        assert TRACK.gap(before.progress, after.progress) == pytest.approx(0.3 * before.speed, rel=0.2)
+    same = check.ahead(observation, rival, plan, 0)
+    assert same.me.progress == pytest.approx(observation.me.progress, abs=1e-6)
