@@ -21,7 +21,7 @@ from controllers.registry import make_controller
 from controllers.rollout_check import RIVAL_TRACKING, CheckedPlanner, RolloutCheck, RolloutCheckSettings
 from controllers.tactical.high_level import MCTSPlanner, lanes_legal
 from sim_core import state as st
-from sim_core.observation import kart_views, observe, place_view
+from sim_core.observation import KartView, Observation, kart_views, observe, place_view
 from sim_core.params import PAPER_KART, SimParams
 from sim_core.track_io import get_track
 from sim_core.world import World
@@ -62,6 +62,20 @@ def _check(depth: int = 2, exhaustive: bool = True) -> RolloutCheck:
     )
     check.reset(CONTEXT)
     return check
+
+
+def _first_corner() -> tuple[Observation, Plan, RolloutCheck, KartView]:
+    """6 s into a race of two fixed-lqng karts (the first corner, the karts close: the rival in reach): kart 0's
+    observation, a plan on the racing line's lanes (the other kart predicted in lane 3), a depth-3 check and the
+    kart it races."""
+    observation = observe(_raced_world(6.0), 0)[0]
+    first = observation.me.checkpoints_passed + 1
+    plan = _plan(first, [LINE_LANES[(first + i) % TRACK.n_checkpoints] for i in range(6)])
+    plan = replace(plan, waypoints={**plan.waypoints, 1: _plan(first, [3, 3, 3, 3, 3, 3]).waypoints[0]})
+    check = _check(depth=3)
+    rival = check.rival(observation)
+    assert rival is not None
+    return observation, plan, check, rival
 
 
 def _plan(first: int, lanes: list[int]) -> Plan:
@@ -159,14 +173,7 @@ def test_a_search_with_the_check_is_the_registered_planner_underneath() -> None:
 def test_the_tree_of_rollouts_scores_every_candidate_as_racing_it_alone() -> None:
     """Candidates sharing their first lanes are raced once up to where they part (the world copied there): each
     score is the number racing that candidate from the start gives, to the last bit, in fewer steps."""
-    world = _raced_world(6.0)  # the first corner, the karts close: the rival is in reach
-    observation = observe(world, 0)[0]
-    check = _check(depth=3)
-    rival = check.rival(observation)
-    assert rival is not None
-    first = observation.me.checkpoints_passed + 1
-    plan = _plan(first, [LINE_LANES[(first + i) % TRACK.n_checkpoints] for i in range(6)])
-    plan = replace(plan, waypoints={**plan.waypoints, 1: _plan(first, [3, 3, 3, 3, 3, 3]).waypoints[0]})
+    observation, plan, check, rival = _first_corner()
     target = plan.ego_waypoints[3].checkpoint + check.settings.settle
     candidates = [(a, b, c) for a in (2, 4) for b in (3, 4) for c in (1, 4)]
     tree = check.scores(observation, rival, plan, target, candidates)
@@ -246,14 +253,7 @@ def test_past_its_deadline_the_check_races_only_the_search_s_own_lanes() -> None
     """A live host's budget spent (the deadline passed before the check began): of the candidates only the search's
     own lanes are raced, to the same score as without a deadline, and the rest are counted as cut; the checked
     planner then sends the search's plan."""
-    world = _raced_world(6.0)
-    observation = observe(world, 0)[0]
-    first = observation.me.checkpoints_passed + 1
-    plan = _plan(first, [LINE_LANES[(first + i) % TRACK.n_checkpoints] for i in range(6)])
-    plan = replace(plan, waypoints={**plan.waypoints, 1: _plan(first, [3, 3, 3, 3, 3, 3]).waypoints[0]})
-    check = _check(depth=3)
-    rival = check.rival(observation)
-    assert rival is not None
+    observation, plan, check, rival = _first_corner()
     target = plan.ego_waypoints[3].checkpoint + check.settings.settle
     candidates = check.candidates(plan, observation.me, LINE_LANES, TRACK.lane_change_limit)
     whole = check.scores(observation, rival, plan, target, candidates)
@@ -283,13 +283,7 @@ def test_the_checked_planner_keeps_to_a_live_budget() -> None:
 def test_a_delayed_plan_is_checked_from_where_the_karts_will_be_when_it_arrives() -> None:
     """``ahead`` races the ego and the kart ahead on the plan sent before for the delay: the same karts (by index),
     each on by about its speed times the delay, and the time moved on; no delay, the same observation."""
-    observation = observe(_raced_world(6.0), 0)[0]
-    first = observation.me.checkpoints_passed + 1
-    plan = _plan(first, [LINE_LANES[(first + i) % TRACK.n_checkpoints] for i in range(6)])
-    plan = replace(plan, waypoints={**plan.waypoints, 1: _plan(first, [3, 3, 3, 3, 3, 3]).waypoints[0]})
-    check = _check(depth=3)
-    rival = check.rival(observation)
-    assert rival is not None
+    observation, plan, check, rival = _first_corner()
     later = check.ahead(observation, rival, plan, 15)
     assert later.time == pytest.approx(observation.time + 0.3) and later.ego == observation.ego
     assert [k.index for k in later.karts] == [k.index for k in observation.karts]

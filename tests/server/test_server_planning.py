@@ -46,12 +46,16 @@ def _worker_pids(pool: PlannerPool) -> list[int]:
     return [p.pid for p in processes if p.pid is not None]
 
 
-def test_plans_survive_a_dead_and_a_hung_worker() -> None:
+def _grid(ego: int) -> tuple[Observation, RaceContext]:
+    """Kart ``ego``'s observation on the oval's grid (two karts) and its race context."""
     track = get_track("oval")
     params = SimParams()
     world = World(track, 1, 2, params, laps=1)
-    observation = observe(world, 0)[1]
-    context = RaceContext(track, params.kart, 1, 2, world.lane_change_limit, 0)
+    return observe(world, 0)[ego], RaceContext(track, params.kart, ego, 2, world.lane_change_limit, 0)
+
+
+def test_plans_survive_a_dead_and_a_hung_worker() -> None:
+    observation, context = _grid(1)
 
     async def scenario() -> None:
         pool = PlannerPool(1)
@@ -107,11 +111,7 @@ def budget_echo_controller() -> HierarchicalController:
 def test_a_time_bounded_planner_gets_the_live_budget_in_its_worker() -> None:
     """The setup's wall-clock budget reaches a planner that can cut its plans short, in the worker process;
     planners without the capability (fixed-lqng's) are built as before."""
-    track = get_track("oval")
-    params = SimParams()
-    world = World(track, 1, 2, params, laps=1)
-    observation = observe(world, 0)[0]
-    context = RaceContext(track, params.kart, 0, 2, world.lane_change_limit, 0)
+    observation, context = _grid(0)
 
     async def scenario() -> None:
         pool = PlannerPool(1)
