@@ -19,7 +19,8 @@ in the high-level slot.
 Its cost is the rollouts: every candidate is ``max_steps`` steps at most of two LQ trackers. Candidates that share
 their first lanes are raced once up to where they part (:meth:`RolloutCheck.scores`), and an exhaustive check of
 depth 3 (64 candidates) takes about 2 s on the 2-core machine (``benchmarks/rollout_check.py``; 5.8 s before
-session 27), against 10-40 ms for the search. Off by default (``mcts-lqng``'s ``rollout_check_depth`` 0).
+session 27), against 10-40 ms for the search. On by default since session 28 (``mcts-lqng``'s
+``rollout_check_depth`` 3), racing only a kart that a racing-line follower predicts (:meth:`RolloutCheck.trusts`).
 """
 
 from __future__ import annotations
@@ -117,12 +118,11 @@ class RolloutCheck:
         self._context: RaceContext | None = None
         self._world: World | None = None
         self._trackers: tuple[LQNGTracker, LQNGTracker] | None = None
-        self._previous: tuple[Observation, Plan] | None = None  # the last plan's observation and the plan sent
+        self._previous: tuple[Observation, Plan] | None = None  # the previous check's observation and plan sent
         self._misses: dict[int, list[float]] = {}  # per other kart: the model's misses [m], oldest first
         self._follower = FixedLinePlanner()  # the racing-line follower that measures how the other karts drive
         self.deadline: float | None = None  # time.perf_counter() after which no new branch is raced (None: none)
         self.lead_s = settings.lead_s  # [s] see RolloutCheckSettings.lead_s
-        self._sent: Plan | None = None  # the plan sent at the previous check
 
     def reset(self, context: RaceContext) -> None:
         """A private two-kart world on the race's track (no sensors) and the two trackers the rollouts drive."""
@@ -135,7 +135,6 @@ class RolloutCheck:
         self.counts = CheckCounts()
         self._previous = None
         self._misses = {}
-        self._sent = None
         self._follower.reset(context)
 
     def measure(self, observation: Observation) -> None:
@@ -147,11 +146,10 @@ class RolloutCheck:
         model is fixed-lqng, and on predicted lanes it misses fixed-lqng itself by 0.5-0.6 m a second ahead on
         average, about half as much as the RL agents (1.0-1.3 m; results/issue11/session28/README.md), too close
         to tell them apart; as the line follower it is, fixed-lqng is predicted to about 0.1 m."""
-        previous, self._previous = self._previous, None
-        if previous is None:
+        if self._previous is None:
             return
         assert self._context is not None and self._world is not None, "reset() first"
-        before, plan = previous
+        before, plan = self._previous
         steps = round((observation.time - before.time) / DT)
         if not 0 < steps <= self.settings.max_steps:
             return
@@ -366,9 +364,7 @@ class RolloutCheck:
         if self.settings.trust_miss > 0.0:
             self.measure(observation)
         checked = self._checked(observation, plan, line_lanes, lane_limit)
-        if self.settings.trust_miss > 0.0:
-            self._previous = (observation, checked)
-        self._sent = checked
+        self._previous = (observation, checked)
         return checked
 
     def ahead(self, observation: Observation, rival: KartView, sent: Plan, steps: int) -> Observation:
@@ -397,8 +393,8 @@ class RolloutCheck:
         target = waypoints[self.settings.depth].checkpoint + self.settings.settle
         candidates = self.candidates(plan, observation.me, line_lanes, lane_limit)
         start, lead = observation, round(self.lead_s / DT)
-        if lead > 0 and self._sent is not None:
-            start = self.ahead(observation, rival, self._sent, lead)
+        if lead > 0 and self._previous is not None:
+            start = self.ahead(observation, rival, self._previous[1], lead)
             rival = next(k for k in start.karts if k.index == rival.index)
         scores = self.scores(start, rival, plan, target, candidates)
         searched = candidates[0]
