@@ -139,7 +139,7 @@ class MCTSLQNGParams:
     own_pace: float = parameter(1.0, OWN_PACE_HELP, minimum=0.8, maximum=1.3)
     close_following: bool = parameter(True, CLOSE_FOLLOWING_HELP)
     grip_steer: float = parameter(0.0, GRIP_STEER_HELP, minimum=0.0, maximum=1.0)
-    rollout_check_depth: int = parameter(3, ROLLOUT_CHECK_HELP, minimum=0, maximum=3)
+    rollout_check_depth: int = parameter(0, ROLLOUT_CHECK_HELP, minimum=0, maximum=3)
     rollout_check_trust_m: float = parameter(TRUST_MISS, ROLLOUT_CHECK_TRUST_HELP, unit="m", minimum=0.0, maximum=10.0)
 
 
