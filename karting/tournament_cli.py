@@ -4,7 +4,7 @@ original implementation's logs) and write a report.
     karting tournament run --agents mcts-lqng,fixed-lqng --tracks oval,complex --races-per-pair 50 --id grid
     karting tournament stats --id grid --json
     karting tournament stats --original-logs ../shared/spec/original_logs --json
-    karting tournament report grid --out results/tournaments/grid
+    karting tournament report grid --out runs/tournaments/grid
 """
 
 from __future__ import annotations
@@ -205,7 +205,7 @@ def stats(
 @app.command()
 def report(
     tournament_id: Annotated[str, typer.Argument(help="a stored tournament")],
-    out: Annotated[Path | None, typer.Option(help="output folder (default results/tournaments/ID)")] = None,
+    out: Annotated[Path | None, typer.Option(help="output folder (default runs/tournaments/ID)")] = None,
     db: DbOption = "karting.db",
     as_json: JsonOption = False,
 ) -> None:
@@ -216,7 +216,7 @@ def report(
     result = _stats_of(store, tournament_id)
     stored = store.get(tournament_id)
     assert stored is not None
-    folder = out or Path("results") / "tournaments" / tournament_id
+    folder = out or Path("runs") / "tournaments" / tournament_id
     title = f"Tournament {tournament_id} ({stored.done}/{stored.total} races, {stored.status.value})"
     files = write_report(result, store.figures(tournament_id), folder, title)
     if as_json:
