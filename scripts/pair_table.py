@@ -1,7 +1,7 @@
 """Per-pairing table of a stored tournament: for each track and pair, wins, finished, mean finish time,
 collisions at fault and illegal lane changes (per-step rule) per race of each side.
 
-    .venv/bin/python scripts/pair_table.py paper-grid-20 --db results/rl/tournaments.db
+    .venv/bin/python scripts/pair_table.py paper-grid-20 --db karting.db
 
 Prints a Markdown table and, as the last line, one JSON object of the same figures.
 """

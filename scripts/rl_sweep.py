@@ -5,7 +5,7 @@ trained policy races ``fixed-lqng`` on the evaluation tracks (seeded, start lane
 Gaussian's mean and with samples from it (stall recovery on, as the registered agents). One JSON object per
 variant goes to ``OUT/sweep.json`` and the last line of stdout.
 
-    python scripts/rl_sweep.py --out results/rl_sweep --variants scripts/rl_variants.json --steps 3000000
+    .venv/bin/python scripts/rl_sweep.py --out runs/rl_sweep --variants scripts/rl_variants/sweep1.json --steps 3000000
 
 A variant file is a JSON list of ``{"name": ..., "agent": "fixed-rl", "args": ["--normalise-reward", ...]}``.
 """

@@ -3,7 +3,7 @@
 
 From the repo root::
 
-    .venv/bin/python scripts/ship_rl_weights.py e2e results/rl/e2e --seed 0 --wall-s 420 --commit abc1234 \
+    .venv/bin/python scripts/ship_rl_weights.py e2e runs/rl/e2e --seed 0 --wall-s 420 --commit abc1234 \
         --command "karting train e2e --steps 3000000" --note "interim weights"
 
 A model trained in stages (e.g. from scratch on one machine, then ``--fine-tune-from`` on another) lists each
