@@ -18,7 +18,7 @@ from sim_core.kart import (
     P_WALL_YAW_RATE,
     max_slip,
 )
-from sim_core.kernel_arrays import NO_REFCOUNT, PHASE, StepScratch, WorldArrays
+from sim_core.kernel_arrays import NO_REFCOUNT, PHASE, StepScratch, TrackArrays, WorldArrays
 from sim_core.rules import front_touches
 from sim_core.state import (
     F_HEADING,
@@ -32,7 +32,6 @@ from sim_core.state import (
     RP_CONTACT_MARGIN,
     RP_DT,
 )
-from sim_core.track_arrays import TrackArrays
 
 CONTACT_ROUNDS = 4  # relaxation rounds of wall and kart-kart contact per step
 

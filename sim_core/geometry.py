@@ -7,13 +7,11 @@ from other compiled kernels. Angles are radians, counter-clockwise; distances me
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
 
-if TYPE_CHECKING:  # the ray grid's build (imported by track_arrays) uses these kernels
-    from sim_core.track_arrays import TrackArrays
+from sim_core.kernel_arrays import TrackArrays
 
 
 # --------------------------------------------------------------------------- scalar helpers

@@ -2,8 +2,11 @@
 plain load, so a bundle costs nothing over separate arguments), and the compile options of the per-race
 kernels.
 
-:class:`WorldArrays` is the world's state (layout in :mod:`sim_core.state`), :class:`StepScratch` the work
+:class:`TrackArrays` is a track flattened for the kernels (built in :mod:`sim_core.track_arrays`),
+:class:`WorldArrays` the world's state (layout in :mod:`sim_core.state`), :class:`StepScratch` the work
 arrays of one step, :class:`RayTables` the sensors' angles prepared once per batch call.
+
+This module imports nothing of sim_core's, so every kernel module can name these types at run time.
 """
 
 from __future__ import annotations
@@ -19,6 +22,35 @@ NO_REFCOUNT: dict[str, Any] = {"cache": True, "_nrt": False}
 # The phases of a step (dynamics, contacts, referee, sensors) live in their own modules but are inlined into
 # the step: as separate calls, passing the bundles of arrays by value cost a fifth of a step.
 PHASE: dict[str, Any] = {"cache": True, "_nrt": False, "inline": "always"}
+
+
+class TrackArrays(NamedTuple):
+    """A track flattened into arrays for the compiled kernels (built by :func:`sim_core.track_arrays.track_arrays`)."""
+
+    centre_xy: np.ndarray  # (M, 2)
+    centre_s: np.ndarray  # (M,)
+    seg_tangent: np.ndarray  # (M, 2) unit vector from sample i to sample i+1
+    seg_length: np.ndarray  # (M,) distance from sample i to sample i+1
+    length: float
+    width_left: np.ndarray  # (M,) wall distance
+    width_right: np.ndarray  # (M,)
+    near_width_left: np.ndarray  # (M,) smallest left wall distance within track_arrays.NEAR_WINDOW
+    near_width_right: np.ndarray  # (M,) smallest right wall distance within track_arrays.NEAR_WINDOW
+    checkpoint_s: np.ndarray  # (N,)
+    checkpoint_centre: np.ndarray  # (N, 2)
+    checkpoint_normal: np.ndarray  # (N, 2) left normal
+    straight: np.ndarray  # (N,) bool: section i (checkpoint i -> i+1) is straight
+    lane_offsets: np.ndarray  # (N, n_lanes) left-positive lateral offsets of the lanes at each checkpoint
+    sample_lane_offsets: np.ndarray  # (M, n_lanes) the same at every centre-line sample
+    wall_segments: np.ndarray  # (W, 4) [ax, ay, ex, ey] of every (simplified) wall segment
+    ray_origin: np.ndarray  # (2,) corner of the ray grid
+    ray_cell: float  # [m] its cell size
+    ray_shape: np.ndarray  # (2,) int64: nx, ny
+    ray_start: np.ndarray  # (nx*ny + 1,) int64 CSR offsets into ray_segments, cell cx*ny + cy
+    ray_segments: np.ndarray  # (C, 4) [ax, ay, ex, ey] of the wall segments within reach of the cell
+    ray_bins: int  # direction bins per cell
+    ray_bin_start: np.ndarray  # (nx*ny*bins + 1,) int32 CSR offsets into ray_bin_index, slot (cx*ny + cy)*bins + bin
+    ray_bin_index: np.ndarray  # (D,) uint16 (or uint32) rows of wall_segments that may be hit first from the slot
 
 
 class WorldArrays(NamedTuple):

@@ -12,7 +12,7 @@ from numba import njit
 
 from sim_core.geometry import body_axes, locate, point_segment_distance, wrap_mod
 from sim_core.kart import P_HALF_LENGTH, P_RADIUS
-from sim_core.kernel_arrays import NO_REFCOUNT, PHASE, StepScratch, WorldArrays
+from sim_core.kernel_arrays import NO_REFCOUNT, PHASE, StepScratch, TrackArrays, WorldArrays
 from sim_core.rules import lane_change_update, required_buffer
 from sim_core.state import (
     EV_CHECKPOINT,
@@ -79,7 +79,6 @@ from sim_core.state import (
     RP_LATERAL_FAULT_SPEED,
     RP_TIME_LIMIT_STEPS,
 )
-from sim_core.track_arrays import TrackArrays
 
 
 @njit(**PHASE)

@@ -10,7 +10,7 @@ from numba import njit
 
 from sim_core.geometry import body_axes, locate
 from sim_core.kart import P_HALF_LENGTH, P_RADIUS
-from sim_core.kernel_arrays import NO_REFCOUNT, RayTables, StepScratch, WorldArrays, make_scratch
+from sim_core.kernel_arrays import NO_REFCOUNT, RayTables, StepScratch, TrackArrays, WorldArrays, make_scratch
 from sim_core.state import (
     F_HEADING,
     F_X,
@@ -23,7 +23,6 @@ from sim_core.state import (
     RP_RAY_ORIGIN,
     RP_RAY_RANGE,
 )
-from sim_core.track_arrays import TrackArrays
 
 ORIGIN_TRACK_MARGIN = 0.1  # [m] sensor origins this far inside the walls' nominal offsets use the bin lists
 

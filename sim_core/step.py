@@ -17,7 +17,7 @@ from numba import njit
 
 from sim_core.contacts import resolve_contacts
 from sim_core.kart import kart_step, tyre_wear
-from sim_core.kernel_arrays import NO_REFCOUNT, PHASE, RayTables, StepScratch, WorldArrays, scratch_views
+from sim_core.kernel_arrays import NO_REFCOUNT, PHASE, RayTables, StepScratch, TrackArrays, WorldArrays, scratch_views
 from sim_core.referee import advance_clock, count_passes, judge_contacts, referee_kart
 from sim_core.sensors import cast_rays
 from sim_core.state import (
@@ -41,7 +41,6 @@ from sim_core.state import (
     R_STEP,
     RP_DT,
 )
-from sim_core.track_arrays import TrackArrays
 
 
 @njit(**PHASE)

@@ -3,10 +3,9 @@ ray grid (:mod:`sim_core.ray_grid`) the sensors read."""
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
 
+from sim_core.kernel_arrays import TrackArrays
 from sim_core.ray_grid import RAY_BINS, RAY_CELL, ray_grid
 from sim_core.track import Track
 
@@ -17,35 +16,6 @@ WALL_MAX_SEGMENT = 40.0  # [m] merged wall segments are kept at most this long
 
 
 NEAR_WINDOW = 2.5  # [m] along-track reach of the near_width_* minima (more than half a kart's length)
-
-
-class TrackArrays(NamedTuple):
-    """A track flattened into arrays for the compiled kernels (see :func:`track_arrays`)."""
-
-    centre_xy: np.ndarray  # (M, 2)
-    centre_s: np.ndarray  # (M,)
-    seg_tangent: np.ndarray  # (M, 2) unit vector from sample i to sample i+1
-    seg_length: np.ndarray  # (M,) distance from sample i to sample i+1
-    length: float
-    width_left: np.ndarray  # (M,) wall distance
-    width_right: np.ndarray  # (M,)
-    near_width_left: np.ndarray  # (M,) smallest left wall distance within NEAR_WINDOW of the sample
-    near_width_right: np.ndarray  # (M,) smallest right wall distance within NEAR_WINDOW of the sample
-    checkpoint_s: np.ndarray  # (N,)
-    checkpoint_centre: np.ndarray  # (N, 2)
-    checkpoint_normal: np.ndarray  # (N, 2) left normal
-    straight: np.ndarray  # (N,) bool: section i (checkpoint i -> i+1) is straight
-    lane_offsets: np.ndarray  # (N, n_lanes) left-positive lateral offsets of the lanes at each checkpoint
-    sample_lane_offsets: np.ndarray  # (M, n_lanes) the same at every centre-line sample
-    wall_segments: np.ndarray  # (W, 4) [ax, ay, ex, ey] of every (simplified) wall segment
-    ray_origin: np.ndarray  # (2,) corner of the ray grid
-    ray_cell: float  # [m] its cell size
-    ray_shape: np.ndarray  # (2,) int64: nx, ny
-    ray_start: np.ndarray  # (nx*ny + 1,) int64 CSR offsets into ray_segments, cell cx*ny + cy
-    ray_segments: np.ndarray  # (C, 4) [ax, ay, ex, ey] of the wall segments within reach of the cell
-    ray_bins: int  # direction bins per cell
-    ray_bin_start: np.ndarray  # (nx*ny*bins + 1,) int32 CSR offsets into ray_bin_index, slot (cx*ny + cy)*bins + bin
-    ray_bin_index: np.ndarray  # (D,) uint16 (or uint32) rows of wall_segments that may be hit first from the slot
 
 
 def _simplify_closed(poly: np.ndarray, tol: float, max_len: float) -> np.ndarray:
