@@ -17,8 +17,8 @@ import json
 import math
 from pathlib import Path
 
-from sim_core.track import Checkpoint, Section, build_track
-from sim_core.track_builder import chain_track, hairpin_pieces, oval_pieces
+from sim_core.track import Checkpoint, Section
+from sim_core.track_builder import build_track, chain_track, hairpin_pieces, oval_pieces
 from sim_core.track_io import TRACKS_DIR, save_track
 
 DESCRIPTIONS = {

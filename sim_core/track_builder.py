@@ -1,14 +1,156 @@
-"""Design tracks from modular pieces (straights and constant-radius curves), like the kit the paper's
-tracks were built from."""
+"""Building tracks: :func:`build_track` makes a :class:`~sim_core.track.Track` from checkpoints and sections
+(the centre line, its samples and the walls), and :func:`chain_track` designs one from modular pieces
+(straights and constant-radius curves), like the kit the paper's tracks were built from.
+
+:mod:`sim_core.track` holds the track type and its queries; the files under ``sim_core/tracks`` are read in
+:mod:`sim_core.track_io`, which builds them here."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
 
-from sim_core.track import Checkpoint, Section, Track, build_track
+import numpy as np
+
+from sim_core.track import CENTRE_SAMPLE_SPACING, DEFAULT_LANE_FRACTIONS, Checkpoint, Section, Track
 
 
+# --------------------------------------------------------------------------- from sections
+def _arc_hermite_segment(p0: np.ndarray, h0: float, p1: np.ndarray, h1: float, n: int) -> np.ndarray:
+    """Points on a cubic Hermite curve from pose (p0, h0) to (p1, h1), tangents sized to approximate an arc."""
+    chord = float(np.linalg.norm(p1 - p0))
+    turn = abs(float(np.angle(np.exp(1j * (h1 - h0)))))
+    if turn < 1e-6:
+        handle = chord / 3.0
+    else:
+        radius = chord / (2.0 * np.sin(turn / 2.0))
+        handle = 4.0 / 3.0 * np.tan(turn / 4.0) * radius
+    t0 = np.array([np.cos(h0), np.sin(h0)]) * 3.0 * handle
+    t1 = np.array([np.cos(h1), np.sin(h1)]) * 3.0 * handle
+    u = np.linspace(0.0, 1.0, n, endpoint=False)[:, None]
+    h00 = 2 * u**3 - 3 * u**2 + 1
+    h10 = u**3 - 2 * u**2 + u
+    h01 = -2 * u**3 + 3 * u**2
+    h11 = u**3 - u**2
+    return h00 * p0 + h10 * t0 + h01 * p1 + h11 * t1
+
+
+INNER_WALL_CURVATURE_MARGIN = 0.85  # [-] the inner wall stays within this fraction of the local radius
+
+
+def _clip_inner_widths(xy: np.ndarray, wl: np.ndarray, wr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Narrow the inside of bends tighter than the half width so that walls never fold over themselves.
+
+    A wall offset by ``w`` from a centre line whose radius of curvature is below ``w`` would loop back
+    (and the lateral coordinate would become ambiguous); there the inner wall is pulled in to
+    ``0.85 * radius``, spread over +-2 m so the wall stays smooth.
+    """
+    forward = np.roll(xy, -1, axis=0) - np.roll(xy, 1, axis=0)
+    heading = np.arctan2(forward[:, 1], forward[:, 0])
+    dh = np.angle(np.exp(1j * (np.roll(heading, -1) - np.roll(heading, 1))))
+    ds = np.linalg.norm(forward, axis=1)
+    curvature = dh / ds
+    spacing = float(np.mean(np.linalg.norm(np.diff(xy, axis=0), axis=1)))
+    half_window = max(round(2.0 / spacing), 1)
+    out = []
+    for width, side in ((wl, 1.0), (wr, -1.0)):
+        inner = side * curvature > 0
+        limit = np.where(inner, INNER_WALL_CURVATURE_MARGIN / np.maximum(np.abs(curvature), 1e-9), np.inf)
+        spread = limit.copy()
+        for shift in range(1, half_window + 1):
+            spread = np.minimum(spread, np.minimum(np.roll(limit, shift), np.roll(limit, -shift)))
+        out.append(np.minimum(width, spread))
+    return out[0], out[1]
+
+
+def resample_closed(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """Resample a closed polyline at (nearly) uniform ``spacing`` [m]; returns (points, arc lengths, length)."""
+    closed = np.vstack([points, points[:1]])
+    seg = np.linalg.norm(np.diff(closed, axis=0), axis=1)
+    cum = np.concatenate([[0.0], np.cumsum(seg)])
+    length = float(cum[-1])
+    m = max(round(length / spacing), 8)
+    s = np.linspace(0.0, length, m, endpoint=False)
+    x = np.interp(s, cum, closed[:, 0])
+    y = np.interp(s, cum, closed[:, 1])
+    return np.stack([x, y], axis=1), s, length
+
+
+def build_track(
+    name: str,
+    checkpoints: list[Checkpoint],
+    sections: list[Section],
+    *,
+    half_width: float = 5.0,
+    laps: int = 3,
+    lane_change_limit: int = 4,
+    lane_fractions: tuple[float, ...] = DEFAULT_LANE_FRACTIONS,
+    centreline: np.ndarray | None = None,
+    description: str = "",
+    meta: dict[str, object] | None = None,
+) -> Track:
+    """Make a :class:`Track` from checkpoints and sections.
+
+    Without ``centreline`` the centre line is a chain of arc-like cubic Hermite curves through the
+    checkpoint centres along their headings, and the road is ``2 * half_width`` wide everywhere.
+    With ``centreline`` (rows ``x, y, w_left, w_right``, closed, dense) the checkpoints are placed at their
+    projections onto it.
+    """
+    if len(checkpoints) != len(sections):
+        raise ValueError("need exactly one section per checkpoint")
+    if len(checkpoints) < 3:
+        raise ValueError("a track needs at least 3 checkpoints")
+    if centreline is None:
+        pieces = []
+        marks = []
+        n = len(checkpoints)
+        for i in range(n):
+            a, b = checkpoints[i], checkpoints[(i + 1) % n]
+            seg = _arc_hermite_segment(np.array(a.centre), a.heading, np.array(b.centre), b.heading, 400)
+            pieces.append(seg)
+        dense = np.vstack(pieces)
+        xy, s, length = resample_closed(dense, CENTRE_SAMPLE_SPACING)
+        # arc length of each checkpoint = where its dense start point lies along the dense polyline
+        closed = np.vstack([dense, dense[:1]])
+        cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(closed, axis=0), axis=1))])
+        marks = [cum[400 * i] * length / cum[-1] for i in range(n)]
+        wl = np.full(len(xy), half_width)
+        wr = np.full(len(xy), half_width)
+        checkpoint_s = np.array(marks)
+    else:
+        cl = np.asarray(centreline, dtype=float)
+        dense_xy = cl[:, :2]
+        xy, s, length = resample_closed(dense_xy, CENTRE_SAMPLE_SPACING)
+        closed = np.vstack([dense_xy, dense_xy[:1]])
+        cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(closed, axis=0), axis=1))])
+        wl = np.interp(s, cum, np.append(cl[:, 2], cl[0, 2]))
+        wr = np.interp(s, cum, np.append(cl[:, 3], cl[0, 3]))
+        provisional = Track(
+            name, tuple(checkpoints), tuple(sections), xy, s, length, wl, wr, np.zeros(len(checkpoints)), wl, wr
+        )
+        checkpoint_s = np.array([provisional.project(np.array(cp.centre))[0] for cp in checkpoints])
+    wall_left, wall_right = _clip_inner_widths(xy, wl, wr)
+    return Track(
+        name=name,
+        checkpoints=tuple(checkpoints),
+        sections=tuple(sections),
+        centre_xy=xy,
+        centre_s=s,
+        length=length,
+        width_left=wall_left,
+        width_right=wall_right,
+        checkpoint_s=checkpoint_s,
+        lane_half_left=wl,
+        lane_half_right=wr,
+        laps=laps,
+        lane_change_limit=lane_change_limit,
+        lane_fractions=tuple(lane_fractions),
+        description=description,
+        meta=dict(meta or {}),
+    )
+
+
+# --------------------------------------------------------------------------- from pieces
 @dataclass(frozen=True)
 class Straight:
     """A straight piece of ``length`` [m], one checkpoint at its start."""

@@ -15,7 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from sim_core.track import DEFAULT_LANE_FRACTIONS, Checkpoint, Section, Track, build_track, resample_closed
+from sim_core.track import DEFAULT_LANE_FRACTIONS, Checkpoint, Section, Track
+from sim_core.track_builder import build_track, resample_closed
 
 TRACKS_DIR = Path(__file__).parent / "tracks"
 FORMAT_VERSION = 1

@@ -13,7 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from sim_core.params import PAPER_KART
-from sim_core.track import CENTRE_SAMPLE_SPACING, INNER_WALL_CURVATURE_MARGIN, Section, Track
+from sim_core.track import CENTRE_SAMPLE_SPACING, Section, Track
+from sim_core.track_builder import INNER_WALL_CURVATURE_MARGIN
 from sim_core.track_io import builtin_track_names, get_track
 
 SPEC_DIR = Path(__file__).resolve().parents[2].parent / "shared" / "spec" / "tracks"
