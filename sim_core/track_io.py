@@ -293,48 +293,7 @@ def import_centreline_csv(
     path = Path(path)
     if scale <= 0 or not math.isfinite(scale):
         raise ValueError(f"scale must be a positive number, got {scale}")
-    try:
-        lines = path.read_text().splitlines()
-    except OSError as exc:
-        raise TrackFormatError(path, "file", f"cannot read: {exc.strerror or exc}") from None
-    rows: list[tuple[float, float, float, float]] = []
-    row_lines: list[int] = []  # file line number of each row
-    first_content_line = True
-    for lineno, line in enumerate(lines, start=1):
-        stripped = line.strip()
-        if not stripped or stripped.startswith("#"):
-            continue
-        parts = [p.strip() for p in stripped.split(",")]
-        # Only the first non-comment line may be a header without '#', and only if none of it is a number
-        # (a damaged first data row must be reported, not silently dropped).
-        if first_content_line and not any(_is_number(p) for p in parts):
-            first_content_line = False
-            continue
-        first_content_line = False
-        if len(parts) != 4:
-            raise TrackFormatError(path, f"line {lineno}", f"expected 4 comma-separated fields, got {len(parts)}")
-        try:
-            values = tuple(float(p) for p in parts)
-        except ValueError:
-            raise TrackFormatError(path, f"line {lineno}", f"not a number in {stripped!r}") from None
-        if not all(math.isfinite(v) for v in values):
-            raise TrackFormatError(path, f"line {lineno}", "values must be finite")
-        x, y, w_right, w_left = values
-        if w_right <= 0 or w_left <= 0:
-            raise TrackFormatError(
-                path, f"line {lineno}", f"track widths must be > 0, got right={w_right}, left={w_left}"
-            )
-        rows.append((x * scale, y * scale, w_left * scale, w_right * scale))
-        row_lines.append(lineno)
-    if len(rows) < 8:
-        raise TrackFormatError(path, "file", f"need at least 8 centre-line rows, got {len(rows)}")
-    data = np.asarray(rows)
-    if np.linalg.norm(data[0, :2] - data[-1, :2]) < 1e-6:
-        data = data[:-1]
-    steps = np.linalg.norm(np.diff(np.vstack([data[:, :2], data[:1, :2]]), axis=0), axis=1)
-    if np.any(steps < 1e-9):
-        bad = int(np.argmin(steps))
-        raise TrackFormatError(path, f"line {row_lines[(bad + 1) % len(data)]}", "repeated point in the centre line")
+    data = _read_centreline_rows(path, scale)
     # Light circular smoothing of the centre line: measured centre lines are noisy at the 0.1 m level,
     # and the headings and curvature used to classify sections come from its derivatives.
     xy, s, length = resample_closed(data[:, :2], 0.5)
@@ -381,6 +340,54 @@ def import_centreline_csv(
         description=f"imported from {path.name} (scale {scale})",
         meta={"source": str(path.name), "scale": scale},
     )
+
+
+def _read_centreline_rows(path: Path, scale: float) -> np.ndarray:
+    """The rows ``x, y, w_left, w_right`` (scaled) of a racetrack-database CSV, without a repeated closing row;
+    raises :class:`TrackFormatError` naming the first bad line (or the file, when it is unreadable or short)."""
+    try:
+        lines = path.read_text().splitlines()
+    except OSError as exc:
+        raise TrackFormatError(path, "file", f"cannot read: {exc.strerror or exc}") from None
+    rows: list[tuple[float, float, float, float]] = []
+    row_lines: list[int] = []  # file line number of each row
+    first_content_line = True
+    for lineno, line in enumerate(lines, start=1):
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        parts = [p.strip() for p in stripped.split(",")]
+        # Only the first non-comment line may be a header without '#', and only if none of it is a number
+        # (a damaged first data row must be reported, not silently dropped).
+        if first_content_line and not any(_is_number(p) for p in parts):
+            first_content_line = False
+            continue
+        first_content_line = False
+        if len(parts) != 4:
+            raise TrackFormatError(path, f"line {lineno}", f"expected 4 comma-separated fields, got {len(parts)}")
+        try:
+            values = tuple(float(p) for p in parts)
+        except ValueError:
+            raise TrackFormatError(path, f"line {lineno}", f"not a number in {stripped!r}") from None
+        if not all(math.isfinite(v) for v in values):
+            raise TrackFormatError(path, f"line {lineno}", "values must be finite")
+        x, y, w_right, w_left = values
+        if w_right <= 0 or w_left <= 0:
+            raise TrackFormatError(
+                path, f"line {lineno}", f"track widths must be > 0, got right={w_right}, left={w_left}"
+            )
+        rows.append((x * scale, y * scale, w_left * scale, w_right * scale))
+        row_lines.append(lineno)
+    if len(rows) < 8:
+        raise TrackFormatError(path, "file", f"need at least 8 centre-line rows, got {len(rows)}")
+    data = np.asarray(rows)
+    if np.linalg.norm(data[0, :2] - data[-1, :2]) < 1e-6:
+        data = data[:-1]
+    steps = np.linalg.norm(np.diff(np.vstack([data[:, :2], data[:1, :2]]), axis=0), axis=1)
+    if np.any(steps < 1e-9):
+        bad = int(np.argmin(steps))
+        raise TrackFormatError(path, f"line {row_lines[(bad + 1) % len(data)]}", "repeated point in the centre line")
+    return data
 
 
 def _is_number(text: str) -> bool:
