@@ -177,7 +177,7 @@ def stats(
     original_logs: Annotated[
         Path | None, typer.Option(help="the original implementation's race logs (a folder of A_vs_B_TrackN.txt)")
     ] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="print the stats JSON (see the README)")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="print the stats JSON (see docs/tournaments.md)")] = False,
     db: DbOption = "karting.db",
 ) -> None:
     """The paper's statistics of a stored tournament, or of the original's released logs."""
