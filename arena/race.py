@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from arena.manifest import Manifest, race_manifest
 from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures
 from controllers.base import Action, Controller, PlanningDriver, RaceContext
 from controllers.hierarchical import HierarchicalController
@@ -68,6 +69,8 @@ class FinishedRace:
     wall_seconds: float
     replay: dict[str, Any] | None
     lap_times: tuple[tuple[float, ...], ...] = ()  # [s] each kart's completed laps, by kart index
+    # what it measured, resolved in the process that raced it (which may load newer code than the runner's)
+    manifest: Manifest | None = None
 
     def figures(self, race_id: str | None = None) -> RaceFigures:
         """The race's figures for the statistics."""
@@ -89,6 +92,20 @@ class PlanIgnoringTracker:
         return self.driver.act(observation)
 
 
+BACKGROUND_PLANNER = "mcts-rl"  # whose default search settings the background planner takes
+
+
+def background_planner_settings() -> dict[str, Any]:
+    """The background planner's settings (:func:`with_background_planner`), as manifests record them."""
+    settings = validate_parameters(BACKGROUND_PLANNER, {})
+    return {
+        "settings_of": BACKGROUND_PLANNER,
+        "iterations": settings.iterations,
+        "horizon": settings.horizon,
+        "planner_rate_hz": settings.planner_rate_hz,
+    }
+
+
 def with_background_planner(agent: str) -> Controller:
     """``agent`` driving unchanged while the MCTS tactical planner (``mcts-rl``'s settings) plans for its kart in the
     background, so the referee measures its Δr and Δv against the plans, as the paper did for E2E. An agent that
@@ -96,7 +113,7 @@ def with_background_planner(agent: str) -> Controller:
     driver = make_agent(agent)
     if isinstance(driver, PlanningDriver):
         return driver
-    settings = validate_parameters("mcts-rl", {})
+    settings = validate_parameters(BACKGROUND_PLANNER, {})
     game = GameParams(horizon=settings.horizon)
     planner = MCTSPlanner(iterations=settings.iterations, rate_hz=settings.planner_rate_hz, params=game)
     return HierarchicalController(agent, planner, PlanIgnoringTracker(driver), rate_hz=driver.rate_hz)
@@ -110,10 +127,13 @@ def job_drivers(job: RaceJob) -> list[Controller]:
 def run_job(job: RaceJob, record: bool = True) -> FinishedRace:
     """Run ``job`` (in whatever process calls it); ``record``: keep the replay."""
     started = time.perf_counter()
+    background = background_planner_settings() if job.background_planners else None
+    manifest = race_manifest(job.spec(), job.background_planners, background)
     outcome = run_race(job.spec(), record=record, drivers=job_drivers(job))
     laps = job.laps if job.laps is not None else load_any_track(job.track).laps
     replay = asdict(outcome.replay) if outcome.replay is not None else None
-    return FinishedRace(job, outcome.result, laps, time.perf_counter() - started, replay, outcome.lap_times)
+    wall = time.perf_counter() - started
+    return FinishedRace(job, outcome.result, laps, wall, replay, outcome.lap_times, manifest)
 
 
 def kart_figures(agent: str, kart: KartResult) -> KartFigures:

@@ -25,7 +25,8 @@ from typing import Any, Literal, Protocol
 import numpy as np
 
 from arena.lifeline import die_with_parent
-from arena.race import FinishedRace, RaceJob, run_job
+from arena.manifest import Manifest, build_manifest, describe_agent, time_limit_of
+from arena.race import FinishedRace, RaceJob, background_planner_settings, run_job
 from arena.records import RaceFigures
 from controllers.race import MAX_START_SPREAD, load_any_track
 from controllers.registry import controller_names, parse_agent, validate_agent
@@ -51,7 +52,7 @@ class TournamentSpec:
     kart_preset: str = "paper"
     plan_latency: float = 0.1  # [s]
     # controllers without a planner given the MCTS planner in the background for their Δr / Δv (as the paper's E2E),
-    # by name: an agent with parameters (``e2e:stall_recovery=false``) gets one too
+    # by name: an agent with parameters (``e2e:deterministic=false``) gets one too
     background_planners: tuple[str, ...] = ("e2e",)
     # [s] each kart launches after a delay drawn from its race's seed, uniform in [0, start_spread): races with a
     # spread, which a start lane alone does not decide (0: the paper's simultaneous starts)
@@ -148,6 +149,26 @@ class TournamentSpec:
         if "background_planners" in values:
             values["background_planners"] = tuple(values["background_planners"])
         return cls(**values)
+
+    def manifest(self) -> Manifest:
+        """What this tournament measures, resolved by this process's code (:mod:`arena.manifest`): every agent
+        with every parameter, the kart, the conditions of its races and how their seeds and lanes are drawn."""
+        conditions = {
+            "tracks": list(self.tracks),
+            "laps": {track: self.laps or load_any_track(track).laps for track in self.tracks},
+            "races_per_pair": self.races_per_pair,
+            "races": self.total,
+            # the lanes of the pair's first and second agent, by the race's number in its pair and track
+            "start_lanes": {"even_races": list(START_LANES), "odd_races": list(START_LANES[::-1])},
+            "start_spread": self.start_spread,
+            "plan_latency": self.plan_latency,
+            "seed": self.seed,
+            "race_seeds": "numpy.random.SeedSequence([seed, index]).generate_state(1)[0] % 2**31",
+            "time_limit": time_limit_of(self.time_limit),
+            "background_planners": list(self.background_planners),
+            "background_planner": background_planner_settings() if self.background_planners else None,
+        }
+        return build_manifest("tournament", [describe_agent(a) for a in self.agents], self.kart_preset, conditions)
 
 
 class RaceStore(Protocol):

@@ -88,7 +88,7 @@ def race(
         str,
         typer.Option(
             help="comma-separated registered controllers, one per kart; NAME:KEY=VALUE sets a parameter, e.g. "
-            "mcts-lqng:rollout_check_depth=0 (the search alone)"
+            "mcts-lqng:iterations=500 (a quarter of the search budget)"
         ),
     ] = "mcts-lqng,fixed-lqng",
     laps: Annotated[int | None, typer.Option(min=1, help="laps (default: the track's)")] = None,
@@ -136,7 +136,9 @@ def race(
 
 
 def race_result_json(outcome: RaceOutcome) -> dict[str, object]:
-    """A headless race's result in the API's shape (``GET /api/races/{id}/result``) plus its wall time [s]."""
+    """A headless race's result in the API's shape (``GET /api/races/{id}/result``, with its manifest) plus its
+    wall time [s]."""
+    from arena.manifest import race_manifest
     from controllers.race import load_any_track
     from server.limits import default_kart_name
     from server.race_config import KartEntry
@@ -150,7 +152,10 @@ def race_result_json(outcome: RaceOutcome) -> dict[str, object]:
     status = RaceStatus.FINISHED if result.done else RaceStatus.STOPPED
     laps = spec.laps if spec.laps is not None else load_any_track(spec.track).laps
     faults = [DriverFaults()] * len(karts)
-    record = race_record("headless", status, spec.track, laps, result, karts, faults, setup, outcome.lap_times)
+    manifest = race_manifest(spec)
+    record = race_record(
+        "headless", status, spec.track, laps, result, karts, faults, setup, outcome.lap_times, manifest=manifest
+    )
     return {**record.to_json(), "wall_seconds": round(outcome.wall_seconds, 3)}
 
 

@@ -1,10 +1,11 @@
 """``karting tournament``: run a round robin (resumable), print the statistics (of a stored tournament or of the
-original implementation's logs) and write a report.
+original implementation's logs), write a report, and publish a finished tournament as the project's results.
 
     karting tournament run --agents mcts-lqng,fixed-lqng --tracks oval,complex --races-per-pair 50 --id grid
     karting tournament stats --id grid --json
     karting tournament stats --original-logs ../shared/spec/original_logs --json
     karting tournament report grid --out runs/tournaments/grid
+    karting tournament publish grid --out docs/results --readme README.md
 """
 
 from __future__ import annotations
@@ -125,7 +126,9 @@ def run(
     store.set_status(tid, TournamentStatus.FINISHED)
     result = _stats_of(store, tid)
     if as_json:
-        print_json({"id": tid, **result.to_json()})
+        finished = store.get(tid)
+        manifest = finished.manifest.to_json() if finished is not None and finished.manifest is not None else None
+        print_json({"id": tid, **result.to_json(), "manifest": manifest})
         return
     _print_wins(result)
     console.print(f"done: karting tournament report {tid} --db {db}")
@@ -209,7 +212,10 @@ def report(
     db: DbOption = "karting.db",
     as_json: JsonOption = False,
 ) -> None:
-    """Write a tournament's report: Markdown, CSV and JSON tables like the paper's, and PNG plots."""
+    """Write a tournament's report: Markdown, CSV and JSON tables like the paper's, PNG plots and the
+    tournament's manifest (``manifest.json``: commit, agents with every parameter, kart, conditions)."""
+    import json
+
     from arena.report import write_report
 
     store = open_tournaments(db)
@@ -219,7 +225,46 @@ def report(
     folder = out or Path("runs") / "tournaments" / tournament_id
     title = f"Tournament {tournament_id} ({stored.done}/{stored.total} races, {stored.status.value})"
     files = write_report(result, store.figures(tournament_id), folder, title)
+    if stored.manifest is not None:
+        files.append(folder / "manifest.json")
+        files[-1].write_text(json.dumps(stored.manifest.to_json(), indent=1) + "\n")
     if as_json:
         print_json({"id": tournament_id, "folder": str(folder), "files": [str(f) for f in files]})
         return
     console.print(f"wrote {len(files)} files to {folder}")
+
+
+@app.command()
+def publish(
+    tournament_id: Annotated[str, typer.Argument(help="a stored, finished tournament")],
+    out: Annotated[Path, typer.Option(help="the results folder")] = Path("docs/results"),
+    readme: Annotated[
+        Path, typer.Option(help="the README whose <!-- results:begin --> ... <!-- results:end --> block gets the table")
+    ] = Path("README.md"),
+    no_readme: Annotated[bool, typer.Option("--no-readme", help="leave the README as it is")] = False,
+    db: DbOption = "karting.db",
+    as_json: JsonOption = False,
+) -> None:
+    """Publish a finished tournament as the project's results: its report, a README saying what was run and
+    manifest.json (commit, agents with every parameter, conditions, each file's SHA-256) into OUT, and its win
+    table into the README's results block. Refused (exit 2, nothing written) when the tournament is unfinished,
+    has no manifest, or its agents' parameters or weights differ from the registry's now."""
+    from rich.markup import escape
+
+    from arena.publish import PublishError
+    from arena.publish import publish as publish_results
+
+    tournament = open_tournaments(db).publishable(tournament_id)
+    if tournament is None:
+        error(f"no tournament {tournament_id!r}")
+        raise typer.Exit(2)
+    try:
+        files = publish_results(tournament, out, None if no_readme else readme)
+    except PublishError as exc:
+        error(f"cannot publish {tournament_id}:\n{escape(str(exc))}")
+        raise typer.Exit(2) from None
+    if as_json:
+        shown = {"id": tournament_id, "folder": str(out), "files": [str(f) for f in files]}
+        print_json({**shown, "readme": None if no_readme else str(readme)})
+        return
+    console.print(f"wrote {len(files)} files to {out}" + ("" if no_readme else f" and the results table to {readme}"))

@@ -294,6 +294,30 @@ else:
     )
 
 
+class AgentManifestOut(BaseModel):
+    """One agent of a manifest: as given, and with every public parameter's value."""
+
+    agent: str = Field(description="as given: NAME or NAME:KEY=VALUE:...")
+    name: str = Field(description="the registered controller (or human)")
+    full: str = Field(description="the agent string with every public parameter: it builds the same driver")
+    parameters: dict[str, bool | int | float | str] = Field(description="every public parameter, defaults included")
+    weights: dict[str, str] | None = Field(None, description="the trained weights it loads: path and sha256")
+
+
+class ManifestOut(BaseModel):
+    """What a race or tournament measured (arena.manifest): code, agents, kart, conditions, machine."""
+
+    version: int
+    kind: str = Field(description="race or tournament")
+    commit: str = Field(description="git commit of the code that ran it, or unknown")
+    dirty: bool | None = Field(description="tracked files differed from the commit (None: unknown)")
+    agents: list[AgentManifestOut]
+    kart_preset: str
+    kart: dict[str, Any] = Field(description="the kart preset's values")
+    conditions: dict[str, Any] = Field(description="track(s), laps, start lanes, start spread, plan latency, seeds")
+    machine: dict[str, Any]
+
+
 class ResultOut(BaseModel):
     """A race's result (final when ``status`` is ``finished``; the state when stopped otherwise)."""
 
@@ -308,6 +332,7 @@ class ResultOut(BaseModel):
     winner: int | None = Field(description="index of the fastest finisher's kart; None if nobody finished")
     karts: list[KartResultOut]
     end_reason: str | None = Field(None, description="why the race ended (absent in results of older versions)")
+    manifest: ManifestOut | None = Field(None, description="what the race measured (None in older results)")
 
 
 class DriveInput(BaseModel):

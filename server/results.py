@@ -7,17 +7,25 @@ kart's ``index``, ``laps_completed`` is ``laps``), the kart's lap times, the fau
 Times are written rounded to the millisecond, Δr and Δv to the millimetre (per second): the simulation's step is
 20 ms, so further digits are float noise. A record stored by an older version loads too: a field it lacks takes
 the field's default, or ``None``.
+
+A record also carries the race's manifest (:mod:`arena.manifest`: the commit, every kart's controller with every
+parameter, the kart preset and the conditions), ``None`` in records stored before manifests were kept.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import MISSING, Field, asdict, dataclass, fields
 from typing import Any
 
-from server.race_config import KartEntry
+from arena.manifest import Manifest, build_manifest, describe_controller, time_limit_of
+from controllers.registry import ControllerSpec
+from server.race_config import KartEntry, RaceConfig
 from server.status import RaceStatus
-from sim_core.world import KartResult, RaceResult
+from sim_core.world import KartResult, RaceResult, grid_lanes
+
+log = logging.getLogger(__name__)
 
 # KartResult field -> its name in a record (and the API), where they differ
 REFEREE_NAMES: Mapping[str, str] = {"kart": "index", "laps_completed": "laps"}
@@ -125,6 +133,7 @@ class RaceRecord:
     kart_preset: str | None = None
     start_lanes: tuple[int, ...] | None = None  # the lanes the karts started in (the defaults when none were asked)
     end_reason: str | None = None  # why the race ended (None: stored by a version that did not say)
+    manifest: Manifest | None = None  # what the race measured (None: stored by a version that kept none)
 
     def to_json(self) -> dict[str, Any]:
         """The JSON form stored with the race (and shown by the API)."""
@@ -140,6 +149,7 @@ class RaceRecord:
             "winner": self.winner,
             "karts": [kart.to_json() for kart in self.karts],
             "end_reason": self.end_reason,
+            "manifest": self.manifest.to_json() if self.manifest is not None else None,
         }
 
     @classmethod
@@ -157,6 +167,7 @@ class RaceRecord:
             data.get("kart_preset"),
             tuple(data["start_lanes"]) if data.get("start_lanes") is not None else None,
             data.get("end_reason"),
+            Manifest.from_json(data["manifest"]) if data.get("manifest") else None,
         )
 
     def kart(self, index: int) -> KartRecord | None:
@@ -175,9 +186,11 @@ def race_record(
     setup: RaceSetup | None = None,
     lap_times: Sequence[Sequence[float]] = (),
     end_reason: str | None = None,
+    manifest: Manifest | None = None,
 ) -> RaceRecord:
     """The record of a race that ended with ``status`` (for ``end_reason``): the referee's ``result`` with each
-    kart's identity, faults and lap times (indexed by kart), and what the race was started with (``setup``)."""
+    kart's identity, faults and lap times (indexed by kart), what the race was started with (``setup``) and what
+    it measured (``manifest``)."""
     records = tuple(
         KartRecord(
             r.kart,
@@ -192,8 +205,34 @@ def race_record(
     )
     seed, preset, lanes = (setup.seed, setup.kart_preset, setup.start_lanes) if setup is not None else (None,) * 3
     return RaceRecord(
-        race_id, status, track, laps, result.duration, result.winner, records, seed, preset, lanes, end_reason
+        race_id, status, track, laps, result.duration, result.winner, records, seed, preset, lanes, end_reason, manifest
     )
+
+
+def live_race_manifest(
+    config: RaceConfig, plan_budget_s: float | None, catalogue: Mapping[str, ControllerSpec[Any]]
+) -> Manifest | None:
+    """The manifest of a race the server runs live from ``config`` with the controllers of ``catalogue``: plans
+    apply when they arrive (no simulated latency; ``plan_budget_s`` [s] is the wall-clock time one plan may take),
+    every kart launches at once, the rules' time limit. ``None`` (logged) if it cannot be made: a result is
+    stored without its manifest rather than lost."""
+    conditions = {
+        "track": config.track_name,
+        "laps": config.laps,
+        "start_lanes": list(grid_lanes(len(config.karts), config.start_lanes)),
+        "start_spread": 0.0,
+        "plan_latency": None,
+        "plan_budget_s": plan_budget_s,
+        "seed": config.seed,
+        "time_limit": time_limit_of(None),
+        "live": True,
+    }
+    try:
+        agents = [describe_controller(k.controller, k.params, lookup=catalogue.__getitem__) for k in config.karts]
+        return build_manifest("race", agents, config.kart_preset, conditions)
+    except Exception:
+        log.exception("race manifest: could not describe the karts %s", [k.controller for k in config.karts])
+        return None
 
 
 @dataclass(frozen=True)

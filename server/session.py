@@ -37,7 +37,7 @@ from server.frames import TelemetryMessage, build_frame, replay_json
 from server.host_messages import PlannerSetup
 from server.plan_requests import PlanRequests
 from server.race_config import KartEntry, RaceConfig
-from server.results import RaceRecord, RaceSetup, race_record
+from server.results import RaceRecord, RaceSetup, live_race_manifest, race_record
 from server.services import RaceServices, Scene
 from server.snapshot import DriverState, RaceSnapshot, Standing
 from server.status import RaceStatus
@@ -471,6 +471,7 @@ class RaceSession:
                 setup,
                 self.laps.all_lap_times(),
                 reason,
+                live_race_manifest(config, self.settings.plan_budget_s, self.services.catalogue),
             )
         try:
             if record is None:

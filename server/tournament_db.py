@@ -4,6 +4,11 @@ links a schedule index to a race of the ``races`` table (result and replay there
 :class:`TournamentDatabase` is the :class:`arena.tournament.RaceStore` of the command line and the server: a race
 and its link are written in one transaction, so a runner killed at any moment leaves each race stored whole or
 not at all, and a resumed run re-runs exactly the missing ones.
+
+Each tournament keeps the manifest it was created with (:meth:`arena.tournament.TournamentSpec.manifest`: commit,
+agents with every parameter, kart, conditions) and each race its own, made by the process that raced it. A
+tournament resumes only while its agents resolve as they did when it was created: one whose agents changed since
+(a default, trained weights) is refused, since its races would describe two different agents under one name.
 """
 
 from __future__ import annotations
@@ -17,6 +22,8 @@ from typing import Any
 from sqlalchemy import JSON, DateTime, Float, ForeignKey, Integer, String, func, select, update
 from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
 
+from arena.manifest import Manifest, stale_agents
+from arena.publish import Tournament
 from arena.race import FinishedRace, RaceJob, race_figures
 from arena.records import RaceFigures
 from arena.tournament import TournamentSpec
@@ -57,6 +64,16 @@ class TournamentRow(_Base):
     error: Mapped[str | None] = mapped_column(String(2000), nullable=True)
 
 
+class TournamentManifestRow(_Base):
+    """A tournament's manifest (a table of its own, so that a database made before manifests gains it as it is
+    opened, with no migration; its tournaments have none)."""
+
+    __tablename__ = "tournament_manifests"
+
+    tournament_id: Mapped[str] = mapped_column(ForeignKey("tournaments.id"), primary_key=True)
+    manifest: Mapped[dict[str, Any]] = mapped_column(JSON)  # Manifest.to_json()
+
+
 class TournamentRaceRow(_Base):
     """A stored race of a tournament: its schedule index, the race's row and the wall time it took."""
 
@@ -80,6 +97,7 @@ class StoredTournament:
     total: int
     done: int
     error: str | None
+    manifest: Manifest | None = None  # None: created before manifests were kept
 
 
 @dataclass(frozen=True)
@@ -109,10 +127,12 @@ class TournamentDatabase:
         _Base.metadata.create_all(db.engine)
 
     def create(self, tournament_id: str, spec: TournamentSpec) -> StoredTournament:
-        """A new tournament, or the stored one with this id and the same spec (to resume; status ``running``).
-        ``ValueError``: a bad id, or the id is taken by a different spec."""
+        """A new tournament with its manifest, or the stored one with this id and the same spec (to resume; status
+        ``running``). ``ValueError``: a bad id, the id is taken by a different spec, or the stored tournament's
+        agents resolve differently now (:func:`arena.manifest.stale_agents`)."""
         if not TOURNAMENT_ID.match(tournament_id):
             raise ValueError(f"tournament ids are 1-24 letters, digits, '-' or '_', got {tournament_id!r}")
+        manifest = spec.manifest()
         with Session(self.db.engine) as session, session.begin():
             row = session.get(TournamentRow, tournament_id)
             if row is None:
@@ -125,9 +145,18 @@ class TournamentDatabase:
                         total=spec.total,
                     )
                 )
+                session.flush()  # the tournament before the manifest that references it
+                session.add(TournamentManifestRow(tournament_id=tournament_id, manifest=manifest.to_json()))
             elif TournamentSpec.from_json(row.spec) != spec:
                 raise ValueError(f"tournament {tournament_id!r} exists with another spec: {row.spec}")
             else:
+                kept = session.get(TournamentManifestRow, tournament_id)
+                changed = stale_agents(Manifest.from_json(kept.manifest)) if kept is not None else []
+                if changed:
+                    raise ValueError(
+                        f"tournament {tournament_id!r} cannot resume: its agents changed since it started "
+                        f"({'; '.join(changed)}); run it under a new id"
+                    )
                 row.status, row.error = TournamentStatus.RUNNING.value, None
         stored = self.get(tournament_id)
         assert stored is not None
@@ -153,7 +182,16 @@ class TournamentDatabase:
         setup = RaceSetup(job.seed, job.kart_preset, grid_lanes(len(karts), tuple(job.start_lanes)))
         faults = [DriverFaults()] * len(karts)
         record = race_record(
-            rid, RaceStatus.FINISHED, job.track, race.laps, race.result, karts, faults, setup, race.lap_times
+            rid,
+            RaceStatus.FINISHED,
+            job.track,
+            race.laps,
+            race.result,
+            karts,
+            faults,
+            setup,
+            race.lap_times,
+            manifest=race.manifest,
         )
         with Session(self.db.engine) as session, session.begin():
             session.add(
@@ -193,7 +231,8 @@ class TournamentDatabase:
             done = session.scalar(
                 select(func.count()).select_from(TournamentRaceRow).where(TournamentRaceRow.tournament_id == row.id)
             )
-            return _stored(row, int(done or 0))
+            manifest = session.get(TournamentManifestRow, row.id)
+            return _stored(row, int(done or 0), Manifest.from_json(manifest.manifest) if manifest else None)
 
     def races(self, tournament_id: str) -> list[TournamentRace]:
         """The stored races in schedule order."""
@@ -215,6 +254,16 @@ class TournamentDatabase:
             if result is not None
         ]
 
+    def publishable(self, tournament_id: str) -> Tournament | None:
+        """The tournament as :func:`arena.publish.publish` reads it (``None``: no such tournament)."""
+        stored = self.get(tournament_id)
+        if stored is None:
+            return None
+        races = self.races(tournament_id)
+        figures = [race.figures() for race in races]
+        manifests = [race.record.manifest for race in races]
+        return Tournament(tournament_id, stored.spec.to_json(), stored.total, stored.manifest, figures, manifests)
+
     def figures(self, tournament_id: str) -> list[RaceFigures]:
         """The stored races' figures in schedule order (the statistics' input)."""
         return [race.figures() for race in self.races(tournament_id)]
@@ -227,7 +276,8 @@ class TournamentDatabase:
         return [t for row in rows if (t := self.get(row.id)) is not None]
 
 
-def _stored(row: TournamentRow, done: int) -> StoredTournament:
+def _stored(row: TournamentRow, done: int, manifest: Manifest | None) -> StoredTournament:
     created = row.created_at if row.created_at.tzinfo else row.created_at.replace(tzinfo=UTC)  # SQLite drops it
     spec = TournamentSpec.from_json(row.spec)
-    return StoredTournament(row.id, created, TournamentStatus(row.status), spec, row.total, done, row.error)
+    status = TournamentStatus(row.status)
+    return StoredTournament(row.id, created, status, spec, row.total, done, row.error, manifest)

@@ -23,7 +23,7 @@ from arena.tournament import TournamentSpec
 from controllers.race import MAX_START_SPREAD
 from server.deps import API_KEY_RESPONSES, ApiKey, TournamentPlotsDep, Tournaments
 from server.limits import MAX_SEED
-from server.models import ErrorOut, Name
+from server.models import ErrorOut, ManifestOut, Name
 from server.strict_json import StrictJSONRoute
 from server.tournament_db import TOURNAMENT_ID, StoredTournament, TournamentRace
 from server.tournaments import TooManyTournamentsError, TournamentConflictError, TournamentRunner
@@ -94,6 +94,9 @@ class TournamentOut(BaseModel):
     total: int
     progress: float = Field(description="done / total")
     spec: dict[str, Any]
+    manifest: ManifestOut | None = Field(
+        None, description="what it measures: commit, agents with every parameter, kart, conditions (None: older)"
+    )
     error: str | None
     url: str
     stats_url: str
@@ -209,6 +212,7 @@ def _view(
         total=stored.total,
         progress=stored.done / stored.total if stored.total else 0.0,
         spec=stored.spec.to_json(),
+        manifest=ManifestOut.model_validate(stored.manifest.to_json()) if stored.manifest is not None else None,
         error=stored.error,
         url=f"/api/tournaments/{stored.id}",
         stats_url=f"/api/tournaments/{stored.id}/stats",
