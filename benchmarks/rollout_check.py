@@ -1,4 +1,4 @@
-"""Plan time of mcts-lqng's rollout check (``rollout_check_depth``, controllers/rollout_check.py) next to the search's
+"""Plan time of the rollout check (controllers/rollout_check.py) behind mcts-lqng's search, next to the search's
 own plan, in the situation it is for: the first corner of ``complex``, 6 s after a start from lane 2 beside
 fixed-lqng in lane 3 (the other kart just ahead).
 
@@ -16,12 +16,15 @@ from __future__ import annotations
 import json
 import statistics
 import time
+from functools import partial
 
 from controllers.base import RaceContext
+from controllers.checked_planner import CheckedPlanner, with_rollout_check
 from controllers.hierarchical import HierarchicalController
+from controllers.lq.presets import fixed_line_tracker
 from controllers.race import RaceSpec, run_race
 from controllers.registry import make_controller
-from controllers.rollout_check import CheckedPlanner
+from controllers.rollout_check import RolloutCheckSettings
 from sim_core.observation import Observation, observe
 from sim_core.world import World
 
@@ -79,8 +82,11 @@ def main() -> None:
     planners = {}
     for depth in (0, *DEPTHS):
         # the gate off: from one observation nothing is ever measured, and a gated check would race no rollout
-        driver = make_controller("mcts-lqng", rollout_check_depth=depth, rollout_check_trust_m=0.0)
+        driver = make_controller("mcts-lqng")
         assert isinstance(driver, HierarchicalController)
+        if depth > 0:  # the kart ahead modelled as fixed-lqng's tracker: the situation is a race against it
+            settings = RolloutCheckSettings(depth=depth, trust_miss=0.0)
+            with_rollout_check(driver, settings, partial(fixed_line_tracker, 4))
         driver.planner.reset(context)
         driver.planner.plan(observation)  # compiles, and fills the search's reused tree as a race would
         planners[depth] = driver.planner

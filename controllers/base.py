@@ -109,3 +109,20 @@ class PlanningDriver(Protocol):
 
     def track(self, observation: Observation) -> Action:
         """The tracker's inputs for the active plan, without planning."""
+
+
+@runtime_checkable
+class ActionFilter(Protocol):
+    """A part between a driver's decision and the kart: it may change the action (a shield that brakes, a
+    recovery that takes over). Filters of one driver apply in order, each to the one before's output."""
+
+    def reset(self, context: RaceContext) -> None:
+        """Prepare for a new race."""
+
+    def apply(self, action: Action, observation: Observation) -> Action:
+        """The action to send instead of ``action`` (``action`` itself when the filter has nothing to say)."""
+
+    @property
+    def took_over(self) -> bool:
+        """Whether the last action applied is the filter's own rather than a change of the driver's (the driver
+        then does not count it as its own decision)."""

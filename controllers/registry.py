@@ -40,44 +40,19 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import partial
 from types import MappingProxyType
 from typing import Any, Generic, TypeVar
 
-from controllers.base import Controller, HighLevelPlanner
+from controllers.base import Controller
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController, LaneFollowerParams
-from controllers.lq.tracker import (
-    CLOSE_FOLLOWING_HELP,
-    CLOSE_FOLLOWING_TRACKING,
-    FIXED_LINE_TRACKING,
-    GRIP_STEER_HELP,
-    MCTS_TRACKING,
-    LQNGTracker,
-)
+from controllers.lq.presets import fixed_line_tracker, mcts_tracker
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
 from controllers.rl.agents import E2EParams, FixedRLParams, MCTSRLParams, build_e2e, build_fixed_rl, build_mcts_rl
-from controllers.rollout_check import (
-    RIVAL_TRACKING,
-    ROLLOUT_CHECK_HELP,
-    ROLLOUT_CHECK_TRUST_HELP,
-    TRUST_MISS,
-    CheckedPlanner,
-    RolloutCheck,
-    RolloutCheckSettings,
-)
-from controllers.tactical.high_level import (
-    DEVIATION_GAIN,
-    DEVIATION_GAIN_HELP,
-    HOLD_GAIN,
-    HOLD_GAIN_HELP,
-    OWN_PACE_HELP,
-    PACE_MODEL_HELP,
-    RACING_LINE_DEFAULT_HELP,
-    MCTSPlanner,
-)
+from controllers.tactical.high_level import HOLD_GAIN, MCTSPlanner, TacticalParams
 
 P = TypeVar("P")
 
@@ -122,25 +97,23 @@ def _spec(name: str, description: str, build: Callable[[P], Controller], params_
     return ControllerSpec(name, description, partial(build, params_type()), params_type, build)
 
 
+LQNG_HORIZON_HELP = "steps of 0.02 s the LQ game looks ahead"
+
+
 @dataclass(frozen=True)
-class MCTSLQNGParams:
-    """Public parameters of ``mcts-lqng``."""
+class MCTSLQNGParams(TacticalParams):
+    """Public parameters of ``mcts-lqng``: the tactical planner's (:class:`TacticalParams`) and its tracker's."""
 
-    # at the maximum a plan takes ~0.4 s (2 karts) and the reused search tree, 8 plans' budgets, ~75 MB
-    iterations: int = parameter(2000, "MCTS iterations per plan", minimum=1, maximum=20_000)
-    horizon: int = parameter(8, "checkpoints the tactical game looks ahead", minimum=1, maximum=16)
-    planner_rate_hz: float = parameter(1.0, "re-plans per second", unit="Hz", minimum=0.1, maximum=10.0)
-    lqng_horizon_steps: int = parameter(4, "steps of 0.02 s the LQ game looks ahead", minimum=1, maximum=25)
-    racing_line_default: bool = parameter(True, RACING_LINE_DEFAULT_HELP)
-    deviation_gain_s: float = parameter(DEVIATION_GAIN, DEVIATION_GAIN_HELP, unit="s", minimum=0.0, maximum=5.0)
-    hold_gain_s: float = parameter(HOLD_GAIN, HOLD_GAIN_HELP, unit="s", minimum=0.0, maximum=5.0)
-
-    pace_model: bool = parameter(True, PACE_MODEL_HELP)
-    own_pace: float = parameter(1.0, OWN_PACE_HELP, minimum=0.8, maximum=1.3)
-    close_following: bool = parameter(True, CLOSE_FOLLOWING_HELP)
-    grip_steer: float = parameter(0.0, GRIP_STEER_HELP, minimum=0.0, maximum=1.0)
-    rollout_check_depth: int = parameter(0, ROLLOUT_CHECK_HELP, minimum=0, maximum=3)
-    rollout_check_trust_m: float = parameter(TRUST_MISS, ROLLOUT_CHECK_TRUST_HELP, unit="m", minimum=0.0, maximum=10.0)
+    hold_gain_s: float = parameter(
+        HOLD_GAIN,
+        "a plan that left the racing line (a pass under way) is kept while its lanes still gain this much on the "
+        "line's and no less than the new plan's less 0.05 s (ours, not the paper's: re-planned afresh every "
+        "second, a pass was given up half way)",
+        unit="s",
+        minimum=0.0,
+        maximum=5.0,
+    )
+    lqng_horizon_steps: int = parameter(4, LQNG_HORIZON_HELP, minimum=1, maximum=25)
 
 
 @dataclass(frozen=True)
@@ -150,7 +123,7 @@ class FixedLQNGParams:
     line_margin_m: float = parameter(
         1.0, "how far the planner's racing line keeps inside the walls", unit="m", minimum=0.5, maximum=3.0
     )
-    lqng_horizon_steps: int = parameter(4, "steps of 0.02 s the LQ game looks ahead", minimum=1, maximum=25)
+    lqng_horizon_steps: int = parameter(4, LQNG_HORIZON_HELP, minimum=1, maximum=25)
     speed_scale: float = parameter(
         1.0,
         "fraction of its speed targets it drives at (under 1: a slower, handicapped kart)",
@@ -161,20 +134,12 @@ class FixedLQNGParams:
 
 def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
     search = MCTSPlanner.from_settings(params, hold_gain=params.hold_gain_s)
-    tracking = CLOSE_FOLLOWING_TRACKING if params.close_following else MCTS_TRACKING
-    tracking = replace(tracking, horizon=params.lqng_horizon_steps, grip_steer=params.grip_steer)
-    planner: HighLevelPlanner = search
-    if params.rollout_check_depth > 0:
-        settings = RolloutCheckSettings(depth=params.rollout_check_depth, trust_miss=params.rollout_check_trust_m)
-        planner = CheckedPlanner(search, RolloutCheck(settings, tracking, RIVAL_TRACKING))
-    return HierarchicalController("mcts-lqng", planner, LQNGTracker(tracking))
+    return HierarchicalController("mcts-lqng", search, mcts_tracker(params.lqng_horizon_steps))
 
 
 def _fixed_lqng(params: FixedLQNGParams) -> Controller:
     planner = FixedLinePlanner(margin=params.line_margin_m)
-    tracker = LQNGTracker(
-        replace(FIXED_LINE_TRACKING, horizon=params.lqng_horizon_steps, speed_scale=params.speed_scale)
-    )
+    tracker = fixed_line_tracker(params.lqng_horizon_steps, params.speed_scale)
     return HierarchicalController("fixed-lqng", planner, tracker)
 
 
@@ -268,7 +233,7 @@ def make_controller(name: str, **overrides: object) -> Controller:
     return spec.factory_for(spec.validate(overrides))()
 
 
-# an agent is a registered name, or a name with parameters: ``mcts-lqng:rollout_check_depth=3:iterations=500``
+# an agent is a registered name, or a name with parameters: ``mcts-lqng:hold_gain_s=0:iterations=500``
 # (what tournaments and headless races take, where one string names a driver)
 AGENT_SEPARATOR = ":"
 

@@ -1,62 +1,55 @@
 """A tactical plan checked by racing it (ours, not the paper's): the MCTS plan's next few lanes against others,
-each raced forward a few seconds in a private copy of the simulator before the plan is sent.
+each raced forward a few seconds in a private copy of the simulator before the plan is sent. A part, not in any
+registered agent's default (docs/agents.md says why).
 
 The discrete game times a lane choice with a lane-radius model calibrated to the racing line; it does not see what
 the LQ tracker and the other kart will make of it. In the first corner of ``complex`` that is the race: from the
 outside start lane, holding the inside lane through checkpoints 7-9 while the kart ahead drifts out with the racing
-line passes it with no contact, and following the line loses (results/issue11/session26/README.md; a search that
-raced every lane sequence in the simulator found the move, the MCTS never chose it).
+line passes it with no contact, and following the line loses (a search that raced every lane sequence in the
+simulator found the move; the MCTS never chose it).
 
 :class:`RolloutCheck` races candidate lanes for the ``depth`` checkpoints after the committed next one: every lane
 sequence (``exhaustive``) or the search's, the racing line's and each lane held, those the lane-change rule allows.
-The ego drives its own tracker; the kart ahead drives an LQ tracker (``rival_tracking``, by default
-:data:`RIVAL_TRACKING`, fixed-lqng's) on the lanes the plan predicts for it. A candidate scores the seconds by which
-the ego crosses the checkpoint ``settle`` past the window ahead of that kart, less ``penalty`` per contact,
-collision at fault or illegal lane change in the rollout; the best replaces the search's lanes when it gains
-``margin``. :class:`CheckedPlanner` puts the check behind an :class:`~controllers.tactical.high_level.MCTSPlanner`
-in the high-level slot.
+The ego drives its own tracker; the kart ahead drives the rival tracker (``rival_tracker``, a model of that kart)
+on the lanes the plan predicts for it. A candidate scores the seconds by which the ego crosses the checkpoint
+``settle`` past the window ahead of that kart, less ``penalty`` per contact, collision at fault or illegal lane
+change in the rollout; the best replaces the search's lanes when it gains ``margin``.
+:class:`~controllers.checked_planner.CheckedPlanner` puts the check behind an
+:class:`~controllers.tactical.high_level.MCTSPlanner` in the high-level slot.
+
+The check is only as good as its model of the other kart. With fixed-lqng's own tracker as the model it won every
+start against fixed-lqng on ``complex``, and against any other driver its model missed by a metre or more a second
+ahead: it raced the wrong kart and collided. A trust gate (``trust_miss``) races a kart only while a racing-line
+follower predicts it; that makes the check a model of one registered opponent's code, which is why no registered
+agent uses it. A general opponent model chosen per kart by measured prediction error is the seam it waits for.
 
 Its cost is the rollouts: every candidate is ``max_steps`` steps at most of two LQ trackers. Candidates that share
 their first lanes are raced once up to where they part (:meth:`RolloutCheck.scores`), and an exhaustive check of
-depth 3 (64 candidates) takes about 2 s on the 2-core machine (``benchmarks/rollout_check.py``; 5.8 s before
-session 27), against 10-40 ms for the search. On by default since session 28 (``mcts-lqng``'s
-``rollout_check_depth`` 3), racing only a kart that a racing-line follower predicts (:meth:`RolloutCheck.trusts`).
+depth 3 (64 candidates) takes about 2 s on the 2-core machine (``benchmarks/rollout_check.py``), against 10-40 ms
+for the search.
 """
 
 from __future__ import annotations
 
 import itertools
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from controllers.base import RaceContext
 from controllers.fixed_line import FixedLinePlanner
-from controllers.lq.tracker import FIXED_LINE_TRACKING, LQNGParams, LQNGTracker
+from controllers.lq.tracker import LQNGTracker
+from controllers.lq.traffic import PassDetector
 from controllers.plan import Plan, Waypoint
-from controllers.tactical.high_level import MCTSPlanner, lanes_legal
+from controllers.tactical.high_level import lanes_legal
 from sim_core import state as st
 from sim_core.observation import KartView, Observation, observe, place_view
 from sim_core.params import DT, SimParams
 from sim_core.world import World
 
-ROLLOUT_CHECK_HELP = (
-    "checkpoints after the next whose lanes are checked by racing every lane sequence a few seconds ahead in the "
-    "simulator, the kart ahead modelled as fixed-lqng, when one is within 25 m or alongside and a racing-line "
-    "follower predicts it (ours, not the paper's; 0: off; 3 takes about 2 s of CPU per plan against such a kart)"
-)
-ROLLOUT_CHECK_TRUST_HELP = (
-    "the check races a kart only while a racing-line follower predicts it, a second ahead, to within this "
-    "(median of the last 3 plans; fixed-lqng: under 0.05 m, the RL agents: 0.2-4 m; 0: every kart)"
-)
-TRUST_MISS = 0.15  # [m] mcts-lqng's default ``trust_miss``
-
-# the kart ahead in a rollout: an LQ line follower tuned as the Fixed agents' (fixed-lqng's) tracker, on the lanes the
-# search predicts for it. Against fixed-lqng that is the very driver; with the tracker's generic settings
-# (LQNGParams()) as the model instead, the check did not find the first-corner pass on complex and lost the lane-2
-# start (results/issue11/session26/README.md): the check is only as good as its model of the other kart
-RIVAL_TRACKING = FIXED_LINE_TRACKING
+TrackerFactory = Callable[[], LQNGTracker]
 
 
 @dataclass(frozen=True)
@@ -76,13 +69,12 @@ class RolloutCheckSettings:
     # how far that misses where the kart really is. A kart is raced against only once measured, and while the
     # median of its last ``trust_samples`` misses is at most ``trust_miss`` [m] (0: no gate, every kart raced).
     # On complex the follower misses fixed-lqng by 0.00-0.05 m a second on (rarely up to 0.5 m) and the RL agents
-    # by 0.2-4 m (results/issue11/session28/README.md). See :meth:`RolloutCheck.trusts`
+    # by 0.2-4 m. See :meth:`RolloutCheck.trusts`
     trust_miss: float = 0.0
     trust_samples: int = 3
     # [s] the plan is applied this long after the observation it answers: the rollouts first race the plan sent
-    # before for that long, then the candidates. Headless races apply plans 0.1 s after they are asked for and the
-    # series were won with 0 here; at 0.3 s of delay and 0 here the lane-2 start on complex was lost
-    # (results/issue11/session28/README.md). A live host's budget (CheckedPlanner.plan_budget_s) replaces it
+    # before for that long, then the candidates (at 0.3 s of delay and 0 here the lane-2 start on complex against
+    # fixed-lqng was lost). A live host's budget (CheckedPlanner.plan_budget_s) replaces it
     lead_s: float = 0.0
 
     def __post_init__(self) -> None:
@@ -110,10 +102,12 @@ class CheckCounts:
 class RolloutCheck:
     """Races candidate ego lanes forward from an observation against the nearest kart ahead (module note)."""
 
-    def __init__(self, settings: RolloutCheckSettings, ego_tracking: LQNGParams, rival_tracking: LQNGParams) -> None:
+    def __init__(
+        self, settings: RolloutCheckSettings, ego_tracker: TrackerFactory, rival_tracker: TrackerFactory
+    ) -> None:
         self.settings = settings
-        self.ego_tracking = ego_tracking
-        self.rival_tracking = rival_tracking
+        self.ego_tracker = ego_tracker
+        self.rival_tracker = rival_tracker
         self.counts = CheckCounts()
         self._context: RaceContext | None = None
         self._world: World | None = None
@@ -128,7 +122,7 @@ class RolloutCheck:
         """A private two-kart world on the race's track (no sensors) and the two trackers the rollouts drive."""
         self._context = context
         self._world = World(context.track, 1, 2, SimParams(kart=context.kart), sensors=False)
-        trackers = (LQNGTracker(self.ego_tracking), LQNGTracker(self.rival_tracking))
+        trackers = (self.ego_tracker(), self.rival_tracker())
         for slot, tracker in enumerate(trackers):
             tracker.reset(RaceContext(context.track, context.kart, slot, 2, context.lane_change_limit, context.seed))
         self._trackers = trackers
@@ -143,9 +137,9 @@ class RolloutCheck:
         follower, and keep how far that misses where it is now.
 
         Why a line follower and not the lanes the search predicts for it (what the rollouts race): the check's
-        model is fixed-lqng, and on predicted lanes it misses fixed-lqng itself by 0.5-0.6 m a second ahead on
-        average, about half as much as the RL agents (1.0-1.3 m; results/issue11/session28/README.md), too close
-        to tell them apart; as the line follower it is, fixed-lqng is predicted to about 0.1 m."""
+        model was fixed-lqng, and on predicted lanes it misses fixed-lqng itself by 0.5-0.6 m a second ahead on
+        average, about half as much as the RL agents (1.0-1.3 m), too close to tell them apart; as the line
+        follower it is, fixed-lqng is predicted to about 0.1 m."""
         if self._previous is None:
             return
         assert self._context is not None and self._world is not None, "reset() first"
@@ -304,11 +298,12 @@ class RolloutCheck:
         numbers as racing each candidate alone (a test checks it), at about three quarters of the steps.
 
         Exact only while the rival's tracker does not look past the ego's next two waypoints
-        (``pass_on_prediction`` reads the ego's lanes where the rival is): such settings race each alone.
+        (a :class:`~controllers.lq.traffic.PassDetector` ``on_prediction`` reads the ego's lanes where the rival is):
+        such a rival races each alone.
 
         Past :attr:`deadline` no new branch is raced but the one of the search's own lanes (the first candidate):
         the candidates left unscored are missing from the result."""
-        if self.rival_tracking.pass_distance > 0.0 and self.rival_tracking.pass_on_prediction:
+        if any(isinstance(rule, PassDetector) and rule.on_prediction for rule in self._rival_rules()):
             return {
                 lanes: self.score(observation, rival, self.with_lanes_plan(plan, lanes), target) for lanes in candidates
             }
@@ -337,6 +332,10 @@ class RolloutCheck:
         explore(candidates, 0, None)
         self.counts.rollouts += len(found)
         return {lanes: found[lanes] for lanes in candidates if lanes in found}
+
+    def _rival_rules(self) -> tuple[object, ...]:
+        assert self._trackers is not None, "reset() first"
+        return self._trackers[1].rules
 
     def _past_deadline(self) -> bool:
         return self.deadline is not None and time.perf_counter() > self.deadline
@@ -424,30 +423,3 @@ class _Saved:
     world: dict[str, np.ndarray]
     steers: tuple[float, ...]
     rollout: _Rollout
-
-
-class CheckedPlanner:
-    """The high-level part of ``mcts-lqng`` with ``rollout_check_depth`` > 0: an :class:`MCTSPlanner` whose
-    plans pass a :class:`RolloutCheck`; the planner then holds the checked lanes as its commitment."""
-
-    def __init__(self, inner: MCTSPlanner, check: RolloutCheck) -> None:
-        self.inner = inner
-        self.check = check
-        self.rate_hz = inner.rate_hz
-        # a live host's wall-clock budget per plan (:class:`~controllers.base.TimeBoundedPlanner`): once spent, the
-        # check races no further branch of candidates. None (headless): every plan whole, deterministic
-        self.plan_budget_s: float | None = None
-
-    def reset(self, context: RaceContext) -> None:
-        """Reset the search and the check."""
-        self.inner.reset(context)
-        self.check.reset(context)
-
-    def plan(self, observation: Observation) -> Plan:
-        """The search's plan, checked (within ``plan_budget_s`` of wall-clock time when set, plus one branch)."""
-        budget = self.plan_budget_s
-        self.check.deadline = None if budget is None else time.perf_counter() + budget
-        self.check.lead_s = self.check.settings.lead_s if budget is None else budget
-        plan = self.check.check(observation, self.inner.plan(observation), self.inner.line_lanes, self.inner.lane_limit)
-        self.inner.commit(plan)
-        return plan

@@ -36,7 +36,7 @@ PAIRS = (
 
 def race_names() -> list[str]:
     """The digest's races as ``TRACK/AGENT_A-vs-AGENT_B`` (kart 0 first: it starts in lane 2, the other in 3)."""
-    names = []
+    names: list[str] = []
     for track in TRACKS:
         for a, b in PAIRS:
             names.extend((f"{track}/{a}-vs-{b}", f"{track}/{b}-vs-{a}"))

@@ -58,6 +58,7 @@ def _race(args: tuple[str, str, str, str, bool, int]) -> dict:
     from controllers.registry import REGISTRY, ControllerSpec, register
     from controllers.rl.agents import RL_RATE_HZ, E2EController
     from controllers.rl.config import agent_kind
+    from controllers.rl.filters import RecoverFromStall
     from controllers.rl.tracker import RLTracker
 
     folder, agent, track, opponent, deterministic, seed = args
@@ -67,8 +68,8 @@ def _race(args: tuple[str, str, str, str, bool, int]) -> dict:
 
         def factory() -> Controller:
             if kind == "e2e":
-                return E2EController(folder, deterministic, stall_recovery=True)
-            tracker = RLTracker(kind, folder, deterministic, stall_recovery=True)
+                return E2EController(folder, deterministic, filters=(RecoverFromStall(),))
+            tracker = RLTracker(kind, folder, deterministic, filters=(RecoverFromStall(),))
             return HierarchicalController(kind, FixedLinePlanner(), tracker, rate_hz=RL_RATE_HZ)
 
         register(ControllerSpec(name, "sweep variant", factory))

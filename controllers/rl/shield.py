@@ -5,7 +5,7 @@ profile allows, as the LQNG tracker never does. :class:`FollowingShield`: it nev
 path faster than it could still brake to that kart's speed short of the rules' buffer.
 
 Ours, not the paper's. The policies were trained on ovals and a hairpin circuit; on ``complex`` they enter its
-hairpins (inside radius 1–5 m) too fast, run wide and lose 1–3 s each (results/rl/README.md). The LQNG tracker
+hairpins (inside radius 1–5 m) too fast, run wide and lose 1–3 s each. The LQNG tracker
 takes the offline racing line's speed profile as a ceiling (:class:`controllers.lq.tracker.LQNGTracker`); the
 shield gives the RL tracker of ``mcts-rl`` and ``fixed-rl`` the same part of the high level: above the profile
 plus a margin it brakes, with the policy's own pedal kept whenever that slows the kart more. Steering stays the
@@ -75,8 +75,8 @@ class FollowingShield:
     still brake to that kart's speed before the gap falls to ``standoff``.
 
     The policies were trained against one opponent on ovals and run into the back of a kart braking ahead of
-    them, or nose into one that moves across: 13 collisions at fault in 20 races of ``mcts-rl`` against the
-    stage-2 ``fixed-rl`` on ``complex`` (session 11; 1 with this shield). A kart is in the
+    them, or nose into one that moves across: 13 collisions at fault in 20 races of ``mcts-rl`` against
+    ``fixed-rl`` on ``complex`` without this shield, 1 with it. A kart is in the
     ego's path when it is ahead along the centre line by less than ``reach`` and, now or ``lookahead`` seconds
     on at both karts' present sideways speeds, laterally closer than ``clearance``. The allowed speed is that
     kart's speed along the track plus ``sqrt(2 b (gap - standoff))`` (``b``: ``braking_use`` of the kart's
@@ -154,72 +154,6 @@ class FollowingShield:
         if pedal >= action.throttle:
             return action
         return Action(action.steer, float(pedal))
-
-
-@dataclass(frozen=True)
-class SideShield:
-    """Keep off a kart alongside: never steer toward a kart level with the ego faster than the lateral room to it
-    allows.
-
-    The policies turn in to their line whatever is beside them: traced (``mcts-rl`` from lane 2 on ``complex``,
-    session 14), the ego led by 0.5 m at the first corner and swept across the other kart 0.9 m to its left,
-    a collision at fault in every lane-2 start (0.5 per race against ``mcts-lqng`` and ``fixed-lqng``). A kart is
-    alongside when it is less than ``reach`` ahead of or behind the ego along the centre line. The ego may then
-    close on it sideways at most at the speed that uses up the room beyond ``clearance`` in ``lookahead`` seconds
-    (negative inside it: the ego moves away); the steer that turns the ego's course to that angle within
-    ``settle`` seconds, on top of following the centre line's curve, bounds the policy's steer on that side. The
-    policy's steer stands whenever it turns away from the kart more; the pedal stays the policy's."""
-
-    wheelbase: float  # [m]
-    max_steer_angle: float  # [rad] front wheel angle at steer input 1
-    reach: float  # [m] along-track distance under which another kart is alongside
-    clearance: float  # [m] lateral centre distance kept to a kart alongside
-    lookahead: float = 0.4  # [s]
-    settle: float = 0.3  # [s]
-
-    @classmethod
-    def of(cls, kart: KartParams, rules: RuleParams | None = None) -> SideShield:
-        """The shield for ``kart``: alongside within a body length plus the rules' side buffer (eq. (8)), a
-        clearance of a body width plus 0.2 m."""
-        rules = rules or RuleParams()
-        return cls(
-            kart.wheelbase,
-            kart.max_steer_angle,
-            kart.body_length + rules.buffer_side,
-            2.0 * kart.body_radius + 0.2,
-        )
-
-    def steer_for_curvature(self, curvature: float) -> float:
-        """The steer input [-1, 1] whose steady bicycle path has ``curvature`` [1/m] (the inverse of
-        :func:`sim_core.kart.kart_step`'s command; clipped at full lock)."""
-        sin_beta = min(max(0.5 * self.wheelbase * curvature, -0.99), 0.99)
-        tan_beta = sin_beta / math.sqrt(1.0 - sin_beta * sin_beta)
-        return min(max(math.atan(2.0 * tan_beta) / self.max_steer_angle, -1.0), 1.0)
-
-    def limit(self, action: Action, me: KartView, others: Iterable[KartView], track: Track) -> Action:
-        """``action`` with its steer bounded away from every kart alongside."""
-        if me.speed < 1.0:
-            return action
-        steer = action.steer
-        _, my_sideways = _track_velocity(me, track)
-        for other in others:
-            if other.index == me.index or other.finished or abs(track.gap(me.progress, other.progress)) >= self.reach:
-                continue
-            lateral = other.lateral - me.lateral
-            side = 1.0 if lateral > 0.0 else -1.0  # +1: the other kart is to the left
-            _, other_sideways = _track_velocity(other, track)
-            allowed_toward = side * other_sideways + (abs(lateral) - self.clearance) / self.lookahead
-            angle_allowed = math.asin(min(max(allowed_toward / me.speed, -0.9), 0.9))
-            angle_now = math.asin(min(max(side * my_sideways / me.speed, -1.0), 1.0))
-            i = int(np.searchsorted(track.centre_s, me.progress % track.length, side="right") - 1)
-            kappa = float(track.centre_curvature[i])
-            follow_curve = kappa / max(1.0 - kappa * me.lateral, 0.2)
-            turn = side * (angle_allowed - angle_now) / (me.speed * self.settle)
-            bound = self.steer_for_curvature(follow_curve + turn)
-            steer = min(steer, bound) if side > 0.0 else max(steer, bound)
-        if steer == action.steer:
-            return action
-        return Action(float(steer), action.throttle)
 
 
 def _track_velocity(kart: KartView, track: Track) -> tuple[float, float]:

@@ -20,20 +20,17 @@ What the live Observation does not carry is reconstructed here, the same way the
 
 from __future__ import annotations
 
-import math
+from collections.abc import Sequence
 from typing import cast
 
 import numpy as np
 
-from controllers.base import Action, RaceContext
+from controllers.base import Action, ActionFilter, RaceContext
 from controllers.plan import Plan
-from controllers.racing_line import optimise_racing_line
 from controllers.rl.actions import ACCELERATE, world_actions
 from controllers.rl.config import DECISION_STEPS, EPISODE_STEPS, STACK, AgentKind
 from controllers.rl.observations import TrackTables, build_frame, frame_size, place_phantoms
 from controllers.rl.policy import Policy, load_policy, weights_folder
-from controllers.rl.recovery import StallRecovery
-from controllers.rl.shield import FollowingShield, LineSpeedShield, SideShield
 from controllers.rl.spawns import racing_lane_at_checkpoints
 from sim_core import state as st
 from sim_core.observation import Observation
@@ -66,12 +63,8 @@ class RLTracker:
     Fixed-RL the plan's lanes at top speed, E2E the checkpoint centres at top speed. Checkpoints a plan does
     not cover fall back to the racing lane (planned agents) or the centre (E2E).
 
-    With ``speed_ceiling_margin`` set, a :class:`~controllers.rl.shield.LineSpeedShield` brakes whenever the kart
-    is over the racing line's speed profile by more than that margin [m/s] (``line_margin``: the line's margin
-    inside the walls, as the planner's). With ``keep_distance``, a :class:`~controllers.rl.shield.FollowingShield`
-    brakes whenever the kart closes on a kart ahead in its path too fast to stop short of the rules' buffer
-    (``keep_distance_lookahead``: how far ahead [s] the karts' sideways motion is extrapolated to judge the path).
-    With ``keep_side``, a :class:`~controllers.rl.shield.SideShield` bounds the steer toward a kart alongside.
+    The policy's action passes through ``filters`` in order (:mod:`controllers.rl.filters`: the shields and the
+    stall recovery).
 
     By default (``deterministic``) it decides by the policy's Gaussian: the mean steer and the pedal branch the
     Gaussian most likely picks (:meth:`controllers.rl.policy.Policy.act`). Otherwise it samples the Gaussian, as
@@ -84,23 +77,10 @@ class RLTracker:
         agent: AgentKind,
         folder: str | None = None,
         deterministic: bool = True,
-        stall_recovery: bool = False,
-        speed_ceiling_margin: float | None = None,
-        line_margin: float = 1.0,
-        keep_distance: bool = False,
-        keep_distance_lookahead: float = 0.0,
-        keep_side: bool = False,
+        filters: Sequence[ActionFilter] = (),
     ) -> None:
         self.agent = agent
-        self.keep_side = keep_side
-        self.side: SideShield | None = None
-        self.keep_distance = keep_distance
-        self.keep_distance_lookahead = keep_distance_lookahead
-        self.following: FollowingShield | None = None
-        self.recovery: StallRecovery | None = StallRecovery() if stall_recovery else None
-        self.speed_ceiling_margin = speed_ceiling_margin
-        self.line_margin = line_margin
-        self.shield: LineSpeedShield | None = None
+        self.filters = tuple(filters)
         self.folder = folder
         self.deterministic = deterministic
         self.rng = np.random.default_rng(0)
@@ -113,17 +93,9 @@ class RLTracker:
         """Load the weights (a clear :class:`~controllers.rl.policy.MissingWeightsError` if there are none) and
         prepare the track tables and the mirrored referee state."""
         self.policy = load_policy(self.folder or weights_folder(self.agent))
-        if self.recovery is not None:
-            self.recovery.reset()
+        for action_filter in self.filters:
+            action_filter.reset(context)
         track, n = context.track, context.n_karts
-        self.shield = None
-        if self.speed_ceiling_margin is not None:
-            line = optimise_racing_line(track, context.kart, margin=self.line_margin)
-            self.shield = LineSpeedShield.of(line, context.kart, self.speed_ceiling_margin)
-        self.following = (
-            FollowingShield.of(context.kart, lookahead=self.keep_distance_lookahead) if self.keep_distance else None
-        )
-        self.side = SideShield.of(context.kart) if self.keep_side else None
         sizes = {STACK * frame_size(m): m for m in range(1, 9)}
         if self.policy.obs_size not in sizes:
             raise ValueError(f"{self.agent} weights take {self.policy.obs_size} floats: no race size gives that")
@@ -173,19 +145,9 @@ class RLTracker:
         inputs, branch = world_actions(self.kart, np.array([me.speed]), raw[None, :])
         self.accelerating[0, 0] = float(branch[0] == ACCELERATE)
         self.action = Action(float(np.clip(inputs[0, 0], -1, 1)), float(np.clip(inputs[0, 1], -1, 1)))
-        if self.shield is not None:
-            self.action = self.shield.limit(self.action, me.speed, me.progress)
-        if self.following is not None:
-            self.action = self.following.limit(self.action, me, observation.karts, self._ctx.track)
-        if self.side is not None:
-            self.action = self.side.limit(self.action, me, observation.karts, self._ctx.track)
-        if self.recovery is not None:
-            _, tangent = self._ctx.track.point_at(me.progress)
-            error = math.remainder(math.atan2(tangent[1], tangent[0]) - me.heading, math.tau)
-            self.action = self.recovery.forward_only(self.action, me.speed)
-            override = self.recovery.override(observation.time, me.speed, error)
-            if override is not None:
-                self.action = override
+        for action_filter in self.filters:
+            self.action = action_filter.apply(self.action, observation)
+            if action_filter.took_over:  # a manoeuvre, not the policy's accelerator
                 self.accelerating[0, 0] = 0.0
         self.decisions += 1
         return self.action

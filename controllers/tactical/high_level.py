@@ -13,10 +13,10 @@ the paper names its variants (MCTS-* and Fixed-*, registered as ``mcts-*`` and `
 from __future__ import annotations
 
 import math
-from dataclasses import replace
-from typing import Protocol
+from dataclasses import dataclass, replace
 
 from controllers.base import RaceContext
+from controllers.parameters import parameter
 from controllers.plan import Plan, Waypoint
 from controllers.racing_line import RacingLine, optimise_racing_line
 from controllers.tactical.game import GameParams
@@ -32,47 +32,35 @@ INTERACTION_WINDOW = 1.0  # [s] another kart predicted at a checkpoint this much
 BEHIND_WINDOW = 0.15
 DEVIATION_GAIN = 0.1  # [s] default of MCTSPlanner.deviation_gain
 HOLD_GAIN = 0.05  # [s] mcts-lqng's default of MCTSPlanner.hold_gain
-RACING_LINE_DEFAULT_HELP = (
-    "the racing line is the plan unless the searched lanes gain deviation_gain_s on it; off: the search's lanes "
-    "(ours, not the paper's)"
-)
-DEVIATION_GAIN_HELP = (
-    "time the searched lanes must gain on the others over the racing line's to replace it, both played out the "
-    "same deterministic way (ours, not the paper's: the search's principal line is too noisy to read as a forecast)"
-)
-PACE_MODEL_HELP = (
-    "the game times each kart by its pace measured in clean air this race (ours, not the paper's: one model of "
-    "the kart for everyone sees nothing to gain behind a slower kart)"
-)
-HOLD_GAIN_HELP = (
-    "a plan that left the racing line (a pass under way) is kept while its lanes still gain this much on the "
-    "line's and no less than the new plan's less 0.05 s (ours, not the paper's: re-planned afresh every second, "
-    "a pass was given up half way)"
-)
-OWN_PACE_HELP = "the ego's pace (its section times over the racing line's) until it has been measured in clean air"
-MAX_SQUEEZE_LOOKAHEAD = (
-    2.0  # [s] how far ahead a kart alongside is extrapolated sideways (:meth:`MCTSPlanner._no_squeeze`)
-)
+MAX_SQUEEZE_LOOKAHEAD = 2.0  # [s] how far ahead a kart alongside is extrapolated sideways (MCTSPlanner._no_squeeze)
 
 
-class TacticalSettings(Protocol):
-    """The public settings an MCTS-planned controller shares (its registry parameters): search budget and rate,
-    the game's horizon, the racing line as the default plan, and the pace model."""
+@dataclass(frozen=True)
+class TacticalParams:
+    """The public parameters every MCTS-planned agent shares (a registered agent's parameter dataclass extends
+    it): the search's budget and rate, the game's horizon, when the searched lanes replace the racing line, and
+    the pace the ego assumes for itself until measured."""
 
-    @property
-    def iterations(self) -> int: ...
-    @property
-    def horizon(self) -> int: ...
-    @property
-    def planner_rate_hz(self) -> float: ...
-    @property
-    def racing_line_default(self) -> bool: ...
-    @property
-    def deviation_gain_s(self) -> float: ...
-    @property
-    def pace_model(self) -> bool: ...
-    @property
-    def own_pace(self) -> float: ...
+    # at the maximum a plan takes ~0.4 s (2 karts) and the reused search tree, 8 plans' budgets, ~75 MB
+    iterations: int = parameter(2000, "MCTS iterations per plan", minimum=1, maximum=20_000)
+    horizon: int = parameter(8, "checkpoints the tactical game looks ahead", minimum=1, maximum=16)
+    planner_rate_hz: float = parameter(1.0, "re-plans per second", unit="Hz", minimum=0.1, maximum=10.0)
+    deviation_gain_s: float = parameter(
+        DEVIATION_GAIN,
+        "time the searched lanes must gain on the others over the racing line's to replace it, both played out "
+        "the same deterministic way (ours, not the paper's: the search's principal line is too noisy to read as a "
+        "forecast)",
+        unit="s",
+        minimum=0.0,
+        maximum=5.0,
+    )
+    own_pace: float = parameter(
+        1.0,
+        "the ego's pace (its section times over the racing line's) until it has been measured in clean air; the "
+        "game times every kart by its pace measured this race",
+        minimum=0.8,
+        maximum=1.3,
+    )
 
 
 def lanes_legal(track: Track, lane: int, count: int, waypoints: list[Waypoint], limit: int) -> bool:
@@ -96,7 +84,7 @@ class MCTSPlanner:
     other kart predicted at that checkpoint within ``INTERACTION_WINDOW`` takes the offline racing line's lane
     when the lane-change rule allows it. The discrete game's lane-radius time model cannot tell apart lane
     choices worth a few hundredths of a second each, and 2,000 iterations cannot either; over a lap they add
-    up to the gap between a tactical planner and a line follower (measured in the closing note of issue 4).
+    up to the gap between a tactical planner and a line follower.
     """
 
     def __init__(
@@ -149,23 +137,23 @@ class MCTSPlanner:
     @classmethod
     def from_settings(
         cls,
-        settings: TacticalSettings,
+        settings: TacticalParams,
         *,
         lane_change_slack: int = 0,
         planned_speeds_behind: bool = True,
         hold_gain: float | None = None,
     ) -> MCTSPlanner:
-        """The planner of a registered controller's ``settings`` (with the racing-line default off, the
-        search's lanes always: ``deviation_gain`` and ``hold_gain`` None)."""
+        """The planner of a registered agent's ``settings``: the racing line unless the search gains, and every
+        kart timed by its measured pace."""
         return cls(
             iterations=settings.iterations,
             rate_hz=settings.planner_rate_hz,
             params=GameParams(horizon=settings.horizon),
             lane_change_slack=lane_change_slack,
-            deviation_gain=settings.deviation_gain_s if settings.racing_line_default else None,
-            hold_gain=hold_gain if settings.racing_line_default else None,
+            deviation_gain=settings.deviation_gain_s,
+            hold_gain=hold_gain,
             planned_speeds_behind=planned_speeds_behind,
-            pace_model=settings.pace_model,
+            pace_model=True,
             own_pace=settings.own_pace,
         )
 
@@ -280,7 +268,7 @@ class MCTSPlanner:
             # ahead: anything within the collision distance is ours to avoid; behind: only a kart still
             # overlapping us, since a follower clear of our tail must keep its distance (and crossing in front
             # of it is how a leader takes the line: holding our lane there lost 9 of 25 lane-2 starts on
-            # complex-reversed in the session-7 series)
+            # complex-reversed)
             if not (-body_length < gap < self.params.collision_distance) or toward * side >= 0:
                 continue
             # where it will be by then, at its present sideways speed

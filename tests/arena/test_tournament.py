@@ -71,8 +71,8 @@ def test_an_agent_with_parameters_races_as_its_own_agent_with_them() -> None:
     wins = tournament_stats(store.figures("variants")).tracks["oval"].wins
     assert wins == {"fixed-lqng": {slow: 2}, slow: {"fixed-lqng": 0}}
     # the paper's E2E races with a planner in the background for its Δr and Δv: with parameters too
-    variant = TournamentSpec(agents=("e2e:stall_recovery=false", "fixed-lqng"), tracks=("oval",), races_per_pair=1)
-    assert variant.jobs()[0].background_planners == ("e2e:stall_recovery=false",)
+    variant = TournamentSpec(agents=("e2e:deterministic=false", "fixed-lqng"), tracks=("oval",), races_per_pair=1)
+    assert variant.jobs()[0].background_planners == ("e2e:deterministic=false",)
     bad = TournamentSpec(agents=("fixed-lqng", "fixed-lqng:speed_scale=0.1")).problems()["agents"]
     assert "'speed_scale' = 0.1 is below its minimum 0.5" in bad
 

@@ -15,7 +15,8 @@ from controllers.base import Action, RaceContext
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController
-from controllers.lq.tracker import CLOSE_FOLLOWING_TRACKING, FIXED_LINE_TRACKING, MCTS_TRACKING, LQNGTracker
+from controllers.lq.presets import FIXED_LINE_TRACKING, MCTS_TRACKING, MCTS_TRAFFIC
+from controllers.lq.tracker import LQNGTracker
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of
 from controllers.registry import (
     REGISTRY,
@@ -28,10 +29,10 @@ from controllers.registry import (
     validate_agent,
     validate_parameters,
 )
+from controllers.rl.filters import KeepDistance, LineSpeedCeiling, RecoverFromStall
 from controllers.rl.tracker import RLTracker
-from controllers.rollout_check import CheckedPlanner
 from controllers.tactical.game import GameParams
-from controllers.tactical.high_level import MCTSPlanner
+from controllers.tactical.high_level import MCTSPlanner, TacticalParams
 from sim_core.observation import Observation
 
 
@@ -53,26 +54,39 @@ def test_published_parameters_are_the_dataclass_fields_and_defaults_lie_within_b
 
 
 def test_the_published_defaults_keep_the_documented_names() -> None:
-    assert dict(REGISTRY["mcts-lqng"].parameters) == {
+    shared = {
         "iterations": "2000",
         "horizon": "8",
         "planner_rate_hz": "1.0",
-        "lqng_horizon_steps": "4",
-        "racing_line_default": "True",
         "deviation_gain_s": "0.1",
-        "hold_gain_s": "0.05",
-        "pace_model": "True",
         "own_pace": "1.0",
-        "close_following": "True",
-        "grip_steer": "0.0",
-        "rollout_check_depth": "3",
-        "rollout_check_trust_m": "0.15",
+    }
+    assert dict(REGISTRY["mcts-lqng"].parameters) == {**shared, "hold_gain_s": "0.05", "lqng_horizon_steps": "4"}
+    assert dict(REGISTRY["mcts-rl"].parameters) == {
+        **shared,
+        "lane_change_slack": "2",
+        "speed_ceiling_margin_mps": "1.0",
+        "keep_distance_lookahead_s": "0.8",
     }
     assert dict(REGISTRY["fixed-lqng"].parameters) == {
         "line_margin_m": "1.0",
         "lqng_horizon_steps": "4",
         "speed_scale": "1.0",
     }
+
+
+def test_the_hierarchical_agents_publish_few_parameters_and_share_the_tactical_ones() -> None:
+    """A public parameter is a quantity to vary, not a version: at most 7 for mcts-lqng and 8 for mcts-rl, the
+    tactical planner's declared once (TacticalParams) for both."""
+    lqng, rl = REGISTRY["mcts-lqng"].params_type, REGISTRY["mcts-rl"].params_type
+    assert lqng is not None and rl is not None
+    assert len(dataclasses.fields(lqng)) <= 7 and len(dataclasses.fields(rl)) <= 8
+    assert issubclass(lqng, TacticalParams) and issubclass(rl, TacticalParams)
+    for name in controller_names():
+        spec = REGISTRY[name]
+        assert spec.params_type is not None
+        switches = [p.name for p in spec.parameter_list if p.type == "bool"]
+        assert switches in ([], ["deterministic"]), f"{name} publishes version switches {switches}"
 
 
 def test_overrides_reach_the_parts_that_use_them() -> None:
@@ -84,48 +98,36 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
         lqng_horizon_steps=6,
         deviation_gain_s=0.3,
         hold_gain_s=0.2,
+        own_pace=1.05,
     )
     assert isinstance(driver, HierarchicalController)
-    assert isinstance(driver.planner, CheckedPlanner) and isinstance(driver.tracker, LQNGTracker)
-    search = driver.planner.inner  # the search behind the rollout check (on by default since session 28)
+    assert isinstance(driver.planner, MCTSPlanner) and isinstance(driver.tracker, LQNGTracker)
+    search = driver.planner
     assert search.iterations == 300 and search.params.horizon == 5
-    assert driver.planner.rate_hz == 2.0 and isinstance(driver.planner.rate_hz, float)
-    assert driver.tracker.params.horizon == 6
+    assert search.rate_hz == 2.0 and isinstance(search.rate_hz, float)
     assert search.deviation_gain == 0.3 and search.hold_gain == 0.2
-    assert driver.tracker.params == dataclasses.replace(CLOSE_FOLLOWING_TRACKING, horizon=6)  # close following
-    linear = make_controller("mcts-lqng", close_following=False, lqng_horizon_steps=6)
-    assert isinstance(linear, HierarchicalController) and isinstance(linear.tracker, LQNGTracker)
-    assert linear.tracker.params == dataclasses.replace(MCTS_TRACKING, horizon=6)
-    assert linear.tracker.params.follow_safe_braking == 0.0  # the linear station-keeping rule
-    gripping = make_controller("mcts-lqng", grip_steer=0.98)
-    assert isinstance(gripping, HierarchicalController) and isinstance(gripping.tracker, LQNGTracker)
-    assert gripping.tracker.params == dataclasses.replace(CLOSE_FOLLOWING_TRACKING, grip_steer=0.98)
-    searched = make_controller("mcts-lqng", racing_line_default=False)
-    assert isinstance(searched, HierarchicalController) and isinstance(searched.planner, CheckedPlanner)
-    assert searched.planner.inner.deviation_gain is None  # the search's lanes, as mcts-rl's by default
-    assert searched.planner.inner.hold_gain is None  # nothing to hold without the racing line
+    assert search.pace_model and search.own_pace == 1.05  # every kart at its measured pace
+    assert driver.tracker.params == dataclasses.replace(MCTS_TRACKING, horizon=6)
+    assert driver.tracker.rules == MCTS_TRAFFIC
     rl = make_controller("mcts-rl")
     assert isinstance(rl, HierarchicalController) and isinstance(rl.planner, MCTSPlanner)
     assert rl.planner.deviation_gain == 0.1  # the racing line unless the search gains, as mcts-lqng's
     assert rl.planner.hold_gain is None  # every plan chosen afresh (mcts-lqng's pass commitment is its own)
-    assert rl.planner.pace_model and rl.planner.own_pace == 1.0  # every kart at its measured pace
-    assert not rl.planner.planned_speeds_behind  # its following shield keeps the distance
-    paced = make_controller("mcts-lqng", own_pace=1.05)
-    assert isinstance(paced, HierarchicalController) and isinstance(paced.planner, CheckedPlanner)
-    assert paced.planner.inner.pace_model and paced.planner.inner.own_pace == 1.05  # measured paces by default
-    unpaced = make_controller("mcts-lqng", pace_model=False, rollout_check_depth=0)
-    assert isinstance(unpaced, HierarchicalController) and isinstance(unpaced.planner, MCTSPlanner)
-    assert not unpaced.planner.pace_model
+    assert rl.planner.pace_model and rl.planner.own_pace == 1.0
+    assert not rl.planner.planned_speeds_behind  # its KeepDistance filter keeps the distance
     slowed = make_controller("fixed-lqng", speed_scale=0.9)
     assert isinstance(slowed, HierarchicalController) and isinstance(slowed.tracker, LQNGTracker)
     assert slowed.tracker.params.speed_scale == 0.9 and make_controller("fixed-lqng").tracker.params.speed_scale == 1.0  # type: ignore[attr-defined]
-    unshielded = make_controller("mcts-rl", keep_distance=False)
-    assert isinstance(unshielded, HierarchicalController) and isinstance(unshielded.planner, MCTSPlanner)
-    assert unshielded.planner.planned_speeds_behind
     for name in ("mcts-rl", "fixed-rl"):
-        sided = make_controller(name, keep_side=True)
-        assert isinstance(sided, HierarchicalController) and isinstance(sided.tracker, RLTracker)
-        assert sided.tracker.keep_side and not make_controller(name).tracker.keep_side  # type: ignore[attr-defined]
+        shielded = make_controller(name, speed_ceiling_margin_mps=2.0, keep_distance_lookahead_s=0.4)
+        assert isinstance(shielded, HierarchicalController) and isinstance(shielded.tracker, RLTracker)
+        ceiling, distance, recovery = shielded.tracker.filters
+        assert isinstance(ceiling, LineSpeedCeiling) and ceiling.margin == 2.0
+        assert isinstance(distance, KeepDistance) and distance.lookahead == 0.4
+        assert isinstance(recovery, RecoverFromStall)
+    fixed_rl = make_controller("fixed-rl", line_margin_m=1.5)
+    assert isinstance(fixed_rl, HierarchicalController) and isinstance(fixed_rl.tracker, RLTracker)
+    assert fixed_rl.tracker.filters[0].line_margin == 1.5  # type: ignore[attr-defined]
     slack = make_controller("mcts-rl", lane_change_slack=1, horizon=6)
     assert isinstance(slack, HierarchicalController) and isinstance(slack.planner, MCTSPlanner)
     assert slack.planner.lane_change_slack == 1 and slack.planner.params.horizon == 6
@@ -139,16 +141,15 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
 def test_defaults_build_the_tuned_drivers() -> None:
     default = make_controller("mcts-lqng")
     assert isinstance(default, HierarchicalController) and isinstance(default.tracker, LQNGTracker)
-    assert default.tracker.params == CLOSE_FOLLOWING_TRACKING  # close following, since session 22
-    # the search, behind the rollout check gated on a racing-line follower's misses (the default since session 28)
-    assert isinstance(default.planner, CheckedPlanner)
-    assert (default.planner.check.settings.depth, default.planner.check.settings.trust_miss) == (3, 0.15)
-    search = default.planner.inner
+    assert default.tracker.params == MCTS_TRACKING and default.tracker.rules == MCTS_TRAFFIC
+    search = default.planner  # the search alone: no model of any other agent's code
     assert isinstance(search, MCTSPlanner) and search.params == GameParams()
     assert (search.iterations, search.rate_hz) == (2000, 1.0)
     fixed = make_controller("fixed-lqng")
     assert isinstance(fixed, HierarchicalController) and isinstance(fixed.tracker, LQNGTracker)
-    assert fixed.tracker.params == FIXED_LINE_TRACKING
+    assert fixed.tracker.params == FIXED_LINE_TRACKING and fixed.tracker.rules == ()
+    e2e = make_controller("e2e")
+    assert [type(f).__name__ for f in e2e.tracker.filters] == ["RecoverFromStall"]  # type: ignore[attr-defined]
 
 
 @pytest.mark.parametrize(
@@ -218,8 +219,8 @@ def test_a_switch_takes_true_or_false_only() -> None:
 def test_a_validated_factory_pickles_for_the_worker_processes() -> None:
     params = validate_parameters("mcts-lqng", {"iterations": 100})
     driver = pickle.loads(pickle.dumps(controller_factory("mcts-lqng", params)))()
-    assert isinstance(driver, HierarchicalController) and isinstance(driver.planner, CheckedPlanner)
-    assert driver.planner.inner.iterations == 100
+    assert isinstance(driver, HierarchicalController) and isinstance(driver.planner, MCTSPlanner)
+    assert driver.planner.iterations == 100
     for name in controller_names():
         assert pickle.loads(pickle.dumps(REGISTRY[name].factory))().name == name
 
@@ -266,9 +267,9 @@ def test_parameters_of_reads_types_and_bounds_from_the_fields() -> None:
     ("agent", "name", "overrides"),
     [
         ("mcts-lqng", "mcts-lqng", {}),
-        ("mcts-lqng:rollout_check_depth=3", "mcts-lqng", {"rollout_check_depth": 3}),
+        ("mcts-lqng:iterations=500", "mcts-lqng", {"iterations": 500}),
         ("fixed-lqng:speed_scale=0.8:line_margin_m=1.5", "fixed-lqng", {"speed_scale": 0.8, "line_margin_m": 1.5}),
-        ("mcts-lqng:close_following=false", "mcts-lqng", {"close_following": False}),
+        ("e2e:deterministic=false", "e2e", {"deterministic": False}),
         ("x:label=fast", "x", {"label": "fast"}),  # not JSON: kept as text (the parameter's check judges it)
     ],
 )
@@ -284,7 +285,8 @@ def test_an_agent_string_is_a_name_and_its_parameters(agent: str, name: str, ove
         ("fixed-lqng:=1", ValueError, "is not KEY=VALUE"),
         ("fixed-lqng:speed_scale=0.8:speed_scale=0.9", ValueError, "given twice"),
         ("fixed-lqng:speed_scale=fast", ParameterError, "must be a float"),
-        ("mcts-lqng:rollout_check_depth=4", ParameterError, "above its maximum"),
+        ("mcts-lqng:horizon=17", ParameterError, "above its maximum"),
+        ("mcts-lqng:rollout_check_depth=3", ParameterError, "unknown"),
     ],
 )
 def test_a_bad_agent_string_says_what_is_wrong(agent: str, error: type[Exception], says: str) -> None:
@@ -293,8 +295,6 @@ def test_a_bad_agent_string_says_what_is_wrong(agent: str, error: type[Exception
 
 
 def test_an_agent_string_builds_the_controller_with_its_parameters() -> None:
-    checked = make_agent("mcts-lqng:rollout_check_depth=2")
-    assert checked.planner.check.settings.depth == 2  # type: ignore[attr-defined]
-    plain = make_agent("mcts-lqng:rollout_check_depth=0")
-    assert not hasattr(plain.planner, "check")  # type: ignore[attr-defined]
-    assert make_agent("mcts-lqng").planner.check.settings.depth == 3  # type: ignore[attr-defined]
+    quick = make_agent("mcts-lqng:iterations=500:hold_gain_s=0")
+    assert (quick.planner.iterations, quick.planner.hold_gain) == (500, 0.0)  # type: ignore[attr-defined]
+    assert make_agent("mcts-lqng").planner.iterations == 2000  # type: ignore[attr-defined]

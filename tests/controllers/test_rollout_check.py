@@ -1,11 +1,13 @@
 """The rollout check races candidate lanes from the observed state: a world placed at the views reproduces them,
 no candidate it sends breaks the lane-change rule, it leaves plans alone with nobody ahead, and in the first corner
-of complex it finds the inside pass that the search alone never takes (results/issue11/session26/README.md)."""
+of complex it finds the inside pass that the search alone never takes, with the kart ahead's own tracker as its
+model (the check is a part no registered agent uses: controllers/rollout_check.py says why)."""
 
 from __future__ import annotations
 
 import time
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 import pytest
@@ -13,12 +15,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as hs
 
 from controllers.base import RaceContext, TimeBoundedPlanner
-from controllers.lq.tracker import CLOSE_FOLLOWING_TRACKING
+from controllers.checked_planner import CheckedPlanner, with_rollout_check
+from controllers.hierarchical import HierarchicalController
+from controllers.lq.presets import fixed_line_tracker, mcts_tracker
 from controllers.plan import Plan, Waypoint
 from controllers.race import RaceSpec, run_race
 from controllers.racing_line import optimise_racing_line
 from controllers.registry import make_controller
-from controllers.rollout_check import RIVAL_TRACKING, CheckedPlanner, RolloutCheck, RolloutCheckSettings
+from controllers.rollout_check import RolloutCheck, RolloutCheckSettings
 from controllers.tactical.high_level import MCTSPlanner, lanes_legal
 from sim_core import state as st
 from sim_core.observation import KartView, Observation, kart_views, observe, place_view
@@ -30,6 +34,15 @@ TRACK = get_track("complex")
 CONTEXT = RaceContext(TRACK, PAPER_KART, 0, 2, TRACK.lane_change_limit, 0)
 LINE_LANES = optimise_racing_line(TRACK, PAPER_KART).checkpoint_lanes
 EMPTY = World(TRACK, 1, 2, SimParams(kart=PAPER_KART), sensors=False)
+EGO = partial(mcts_tracker, 4)  # mcts-lqng's tracker
+RIVAL = partial(fixed_line_tracker, 4)  # the model of the kart ahead: fixed-lqng's tracker
+
+
+def _checked(depth: int, trust: float = 0.0) -> HierarchicalController:
+    """mcts-lqng with its plans checked to ``depth``, the kart ahead modelled as fixed-lqng (gated at ``trust``)."""
+    driver = make_controller("mcts-lqng")
+    assert isinstance(driver, HierarchicalController)
+    return with_rollout_check(driver, RolloutCheckSettings(depth=depth, trust_miss=trust), RIVAL)
 
 
 def _raced_world(seconds: float) -> World:
@@ -57,9 +70,7 @@ def test_a_world_placed_at_the_views_shows_the_same_karts() -> None:
 
 
 def _check(depth: int = 2, exhaustive: bool = True) -> RolloutCheck:
-    check = RolloutCheck(
-        RolloutCheckSettings(depth=depth, exhaustive=exhaustive), CLOSE_FOLLOWING_TRACKING, RIVAL_TRACKING
-    )
+    check = RolloutCheck(RolloutCheckSettings(depth=depth, exhaustive=exhaustive), EGO, RIVAL)
     check.reset(CONTEXT)
     return check
 
@@ -146,8 +157,8 @@ def test_the_checked_planner_holds_the_inside_of_the_first_corner_and_passes() -
             crossings.setdefault(key, (int(world.istate[0, k, st.I_LANE]), step))
 
     spec = RaceSpec("complex", ("mcts-lqng", "fixed-lqng"), seed=0, start_lanes=(2, 3), time_limit=11.5)
-    checked = make_controller("mcts-lqng", rollout_check_depth=3)
-    assert isinstance(checked.planner, CheckedPlanner)  # type: ignore[attr-defined]
+    checked = _checked(depth=3, trust=0.15)
+    assert isinstance(checked.planner, CheckedPlanner)
     run_race(spec, drivers=[checked, make_controller("fixed-lqng")], on_step=record)
     inside = [crossings[(0, c)][0] for c in (7, 8, 9)]
     assert min(inside) >= 3 and 4 in inside, inside  # on the inside half, in lane 4 at one crossing at least
@@ -156,17 +167,17 @@ def test_the_checked_planner_holds_the_inside_of_the_first_corner_and_passes() -
     assert result_faults.changed >= 1
 
     crossings.clear()
-    plain = make_controller("mcts-lqng", rollout_check_depth=0)
+    plain = make_controller("mcts-lqng")
     run_race(spec, drivers=[plain, make_controller("fixed-lqng")], on_step=record)
     assert crossings[(0, 10)][1] > crossings[(1, 10)][1]  # without the check it is still behind there
 
 
 def test_a_search_with_the_check_is_the_registered_planner_underneath() -> None:
-    checked = make_controller("mcts-lqng", rollout_check_depth=2)
-    plain = make_controller("mcts-lqng", rollout_check_depth=0)
-    assert isinstance(checked.planner, CheckedPlanner)  # type: ignore[attr-defined]
+    checked = _checked(depth=2)
+    plain = make_controller("mcts-lqng")
+    assert isinstance(checked.planner, CheckedPlanner)
     assert isinstance(plain.planner, MCTSPlanner)  # type: ignore[attr-defined]
-    assert checked.planner.check.settings.depth == 2  # type: ignore[attr-defined]
+    assert checked.planner.check.settings.depth == 2
     assert checked.planner.inner.iterations == plain.planner.iterations  # type: ignore[attr-defined]
 
 
@@ -189,7 +200,7 @@ def _gated_race(opponent: str, seconds: float, trust: float = 0.15) -> tuple[Rol
     """A lane-2 start on complex of mcts-lqng (a depth-1 check gated at ``trust``) against ``opponent``, stopped
     after ``seconds``: the check and the finish-line-free race's last positions (x, y per kart)."""
     spec = RaceSpec("complex", ("mcts-lqng", opponent), seed=0, start_lanes=(2, 3), time_limit=seconds)
-    checked = make_controller("mcts-lqng", rollout_check_depth=1, rollout_check_trust_m=trust)
+    checked = _checked(depth=1, trust=trust)
     end: list[float] = []
 
     def last(world: World, drivers: object, step: int) -> None:
@@ -238,7 +249,7 @@ def test_the_gate_races_nobody_before_it_has_measured_them() -> None:
     observation = observe(world, 0)[0]
     plan = _plan(1, [2, 2, 3, 4, 4])
     plan = replace(plan, waypoints={**plan.waypoints, 1: _plan(1, [3, 3, 3, 3, 3]).waypoints[0]})
-    gated = RolloutCheck(RolloutCheckSettings(depth=2, trust_miss=0.15), CLOSE_FOLLOWING_TRACKING, RIVAL_TRACKING)
+    gated = RolloutCheck(RolloutCheckSettings(depth=2, trust_miss=0.15), EGO, RIVAL)
     gated.reset(CONTEXT)
     assert gated.check(observation, plan, LINE_LANES, TRACK.lane_change_limit) is plan
     assert (gated.counts.untrusted, gated.counts.checked, gated.counts.rollouts) == (1, 0, 0)
@@ -270,7 +281,7 @@ def test_the_checked_planner_keeps_to_a_live_budget() -> None:
     branches once the budget is spent; without it (headless) every candidate is raced."""
     observation = observe(_raced_world(6.0), 0)[0]
     for budget, cut in ((None, False), (0.0, True)):
-        driver = make_controller("mcts-lqng", rollout_check_trust_m=0.0)  # the gate off: raced at once
+        driver = _checked(depth=3)  # the gate off: raced at once
         planner = driver.planner  # type: ignore[attr-defined]
         assert isinstance(planner, TimeBoundedPlanner) and planner.plan_budget_s is None
         planner.plan_budget_s = budget

@@ -1,8 +1,7 @@
 """The RL tracker's shields. The line-speed shield: its ceiling against the racing line's profile, when it brakes,
 and that it holds the RL agents under the ceiling in a race where the policy alone does not stay there. The
 following shield: its standoffs from the rules' buffers, the allowed speed behind a kart against the hand-worked
-formula, and which karts it ignores. The side shield: its steer for a curvature against the kart's own command,
-which way it bounds the steer, and that it keeps a kart steering into another alongside a body width clear."""
+formula, and which karts it ignores."""
 
 from __future__ import annotations
 
@@ -15,13 +14,16 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from controllers.base import Action
+from controllers.hierarchical import HierarchicalController
 from controllers.race import RaceSpec, run_race
 from controllers.racing_line import optimise_racing_line
 from controllers.registry import make_controller
-from controllers.rl.shield import FollowingShield, LineSpeedShield, SideShield
-from sim_core.kart import kart_step, throttle_for_acceleration
+from controllers.rl.filters import LineSpeedCeiling
+from controllers.rl.shield import FollowingShield, LineSpeedShield
+from controllers.rl.tracker import RLTracker
+from sim_core.kart import throttle_for_acceleration
 from sim_core.observation import KartView, observe
-from sim_core.params import DT, kart_preset
+from sim_core.params import kart_preset
 from sim_core.track_io import get_track
 
 KART = kart_preset("paper")
@@ -49,7 +51,7 @@ def test_a_kart_that_stays_a_body_width_clear_of_the_path_is_passed_without_brak
     """1.25 m to the side now (over the 1.2 m clearance), drifting toward the ego: ignored while the extrapolated
     lateral distance 0.8 s on stays over a body width plus 0.1 m (1.0 m), in the path once it falls under.
     Holding the extrapolation to the 0.3 m margin of the present kept fixed-rl braking half alongside e2e, a
-    body width clear, for whole laps (session 13)."""
+    body width clear, for whole laps."""
     assert FOLLOW.clearance_then == pytest.approx(1.0)
     looking = replace(FOLLOW, lookahead=0.8)
     me = _view(0, 100.0, -0.625, 12.0)
@@ -94,7 +96,10 @@ def _worst_excess(shielded: bool) -> float:
         me = observe(world, 0)[0].karts[0]
         worst[0] = max(worst[0], me.speed - SHIELD.ceiling(me.progress))
 
-    driver = make_controller("mcts-rl", line_speed_shield=shielded)
+    driver = make_controller("mcts-rl")
+    assert isinstance(driver, HierarchicalController) and isinstance(driver.tracker, RLTracker)
+    if not shielded:
+        driver.tracker.filters = tuple(f for f in driver.tracker.filters if not isinstance(f, LineSpeedCeiling))
     spec = RaceSpec(track="complex", controllers=("mcts-rl",), seed=0, start_lanes=(2,), time_limit=40.0)
     run_race(spec, on_step=watch, drivers=[driver])
     return worst[0]
@@ -185,88 +190,3 @@ def test_the_following_shield_only_ever_lowers_the_pedal(
     assert out.throttle <= throttle
     if speed <= FOLLOW.allowed_speed(me, [me, other], TRACK):
         assert out == action
-
-
-SIDE = SideShield.of(KART)
-STRAIGHT = 360.0  # [m] complex's longest straight runs from 353.5 m to 407.8 m
-
-
-def _free_view(index: int, x: float, y: float, heading: float, speed: float) -> KartView:
-    """A kart anywhere (its progress and lateral offset projected onto complex's centre line)."""
-    progress, lateral = TRACK.project(np.array([x, y]))
-    return KartView(index, x, y, heading, speed, progress, lateral, 0.25, 1, 2, 0, 0.0, speed, 0.25, False)
-
-
-def test_alongside_means_within_a_body_length_and_the_side_buffer_with_a_body_width_and_margin_kept() -> None:
-    assert SIDE.reach == pytest.approx(2.5)
-    assert SIDE.clearance == pytest.approx(1.1)
-
-
-@pytest.mark.parametrize("steer", [-0.9, -0.3, 0.0, 0.2, 0.7])
-def test_the_steer_for_a_curvature_inverts_the_karts_command(steer: float) -> None:
-    """The kart's commanded curvature (sim_core.kart.kart_step): 2 sin(atan(tan(steer * max) / 2)) / wheelbase."""
-    tan_beta = 0.5 * math.tan(steer * KART.max_steer_angle)
-    curvature = 2.0 * math.sin(math.atan(tan_beta)) / KART.wheelbase
-    assert SIDE.steer_for_curvature(curvature) == pytest.approx(steer, abs=1e-9)
-
-
-@given(
-    steer=st.floats(-1.0, 1.0),
-    throttle=st.floats(-1.0, 1.0),
-    lateral=st.floats(-3.0, 3.0),
-    gap=st.floats(-4.0, 4.0),
-    drift=st.floats(-0.2, 0.2),
-)
-def test_the_side_shield_only_bounds_the_steer_toward_a_kart_alongside(
-    steer: float, throttle: float, lateral: float, gap: float, drift: float
-) -> None:
-    """The pedal is the policy's; the steer only ever moves away from the other kart (lower when it is to the
-    left, higher when to the right), and a kart further along or back than the reach changes nothing."""
-    me = _view(0, STRAIGHT + 5.0, 0.0, 12.0, heading_offset=drift)
-    other = _view(1, STRAIGHT + 5.0 + gap, lateral, 12.0)
-    action = Action(steer, throttle)
-    out = SIDE.limit(action, me, [me, other], TRACK)
-    assert out.throttle == throttle
-    if abs(gap) >= SIDE.reach:
-        assert out == action
-    elif lateral > 0.0:
-        assert out.steer <= steer
-    else:
-        assert out.steer >= steer
-
-
-def test_a_kart_well_clear_alongside_is_not_steered_around() -> None:
-    """3 m to the left, both straight ahead: a gentle turn toward it (room for 0.4 s) is left alone."""
-    me, other = _view(0, STRAIGHT + 5.0, -1.5, 12.0), _view(1, STRAIGHT + 5.0, 1.5, 12.0)
-    assert SIDE.limit(Action(0.02, 1.0), me, [me, other], TRACK) == Action(0.02, 1.0)
-
-
-@pytest.mark.parametrize("side", [1.0, -1.0])
-def test_steering_into_a_kart_alongside_keeps_a_body_width_clear(side: float) -> None:
-    """Closed loop on complex's longest straight: the ego steers toward a kart level with it 1.4 m away (steer
-    0.3, a 3 m/s sideways closing within half a second) for 1.5 s, the other kart drives straight. Without the
-    shield the centres close to under a body width (contact); with it they stay over the body width."""
-    p = KART.as_array()
-
-    def closest(shielded: bool) -> float:
-        start, tangent = TRACK.point_at(STRAIGHT)
-        normal = np.array([-tangent[1], tangent[0]])
-        heading = math.atan2(float(tangent[1]), float(tangent[0]))
-        karts = [
-            [*(start - 0.7 * side * normal), heading, 13.0, 0.0, 0.0],
-            [*(start + 0.7 * side * normal), heading, 13.0, 0.0, 0.0],
-        ]
-        nearest = math.inf
-        for _ in range(int(1.5 / DT)):
-            views = [_free_view(i, k[0], k[1], k[2], k[3]) for i, k in enumerate(karts)]
-            action = Action(0.3 * side, 0.0)
-            if shielded:
-                action = SIDE.limit(action, views[0], views, TRACK)
-            for k, a in ((karts[0], action), (karts[1], Action(0.0, 0.0))):
-                x, y, h, v, slip, _, yaw = kart_step(p, *k[:5], k[5], a.steer, a.throttle, DT)
-                k[:] = [x, y, h, v, slip, yaw]
-            nearest = min(nearest, math.dist(karts[0][:2], karts[1][:2]))
-        return nearest
-
-    assert closest(shielded=False) < 2.0 * KART.body_radius
-    assert closest(shielded=True) > 2.0 * KART.body_radius + 0.05
