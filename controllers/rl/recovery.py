@@ -3,9 +3,9 @@ the policy; and never let the policy reverse on its own.
 
 Ours, not the paper's. Trained on the ovals and a hairpin circuit, the RL agents sometimes stop against the
 outside wall at the exit of a hairpin they have never seen and coast there, or reverse away from the track for
-seconds (measured on ``complex``: results/rl/README.md). A real racing stack has such a manoeuvre; this one is
-deliberately simple and is a public parameter of every RL agent (``stall_recovery``), so a series can be run
-with it off.
+seconds (measured on ``complex``). A real racing stack has such a manoeuvre; this one is
+deliberately simple: an action filter (:class:`controllers.rl.filters.RecoverFromStall`) that every RL agent
+composes.
 """
 
 from __future__ import annotations

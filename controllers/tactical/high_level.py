@@ -306,7 +306,7 @@ class MCTSPlanner:
         # the root's own crossing (the lane the kart is committed to at its next checkpoint) leads the plan, at the
         # speed predicted there (the line's, as far as reachable) even without planned speeds behind: mcts-rl's
         # policy brakes for it into hairpins. At top speed there it was faster alone on oval and lost in traffic on
-        # complex (the paper grid: 329 of 400 wins against 364, results/rl/session16)
+        # complex (the paper grid: 329 of 400 wins against 364)
         point = self._context.track.lane_point(me.checkpoint, me.lane) if self._context else (0.0, 0.0)
         first = Waypoint(me.checkpoint, me.lane, (float(point[0]), float(point[1])), me.speed, 0.0)
         plan = replace(plan, waypoints={**plan.waypoints, plan.ego: (first, *plan.ego_waypoints)})

@@ -4,7 +4,7 @@ The discrete game times every player by one model of the kart, calibrated to the
 (:mod:`controllers.tactical.calibration`). The karts on track are not that model: the LQNG tracker laps
 ``complex`` 5-10% over the line's predicted lap and the RL trackers 3-4%, so a kart behind a slower one
 sees no time to gain by going past it and follows it home (``mcts-rl`` 3.5 s a race faster alone than
-``mcts-lqng``, 0.6 s behind it at the flag, session 12). A kart's pace is its observed time over the sections it
+``mcts-lqng``, 0.6 s behind it at the flag). A kart's pace is its observed time over the sections it
 crossed in clean air, over the line's predicted time for the same sections, forgetting old sections
 geometrically; the game multiplies the player's section times by it (:data:`controllers.tactical.rules.PACE`).
 """

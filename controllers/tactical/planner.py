@@ -142,7 +142,7 @@ class TacticalPlanner:
         A kart a checkpoint behind the leader may be on its way into a hairpin: carried there at its present
         speed it would enter the game faster than the corner can be braked for, a dead end with no legal move
         (10 of mcts-lqng's 108 plans in a race on ``complex`` behind fixed-lqng had no searched ego move for this
-        reason, session 11). Where the game has no legal move in the lane (already a dead end), the kart keeps
+        reason). Where the game has no legal move in the lane (already a dead end), the kart keeps
         its speed on the way."""
         n = self.track.n_checkpoints
         single = row[np.newaxis, :].copy()

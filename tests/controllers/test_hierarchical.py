@@ -223,7 +223,7 @@ def test_a_kart_is_clear_behind_only_past_half_a_body_length() -> None:
 
 
 def test_a_leader_a_body_length_ahead_takes_the_racing_line_into_the_corner() -> None:
-    """The race of seed 0 on complex-reversed (session 11), 7.1 s in: leading by 1.9 m into the first hairpin
+    """The race of seed 0 on complex-reversed, 7.1 s in: leading by 1.9 m into the first hairpin
     with a line follower behind and to its right, the game read the follower as level (its speed bins) and
     sent the ego away from the line's lane 2 at checkpoint 10 (the corner's entry) in some seeds; in the race
     it went down the inside, and the follower went round the outside and won. Clear ahead, the leader takes
@@ -262,7 +262,7 @@ def test_without_planned_speeds_behind_every_waypoint_takes_the_lines_speed_prof
 def test_the_roots_own_waypoint_keeps_its_predicted_speed_without_planned_speeds() -> None:
     """The plan's first waypoint is the ego's committed crossing of its next checkpoint, at the speed predicted
     there, also for a planner without planned speeds behind (mcts-rl's): its policy brakes for it into hairpins.
-    At top speed there mcts-rl won 329 of the paper grid's 400 races instead of 364 (session 16). The later
+    At top speed there mcts-rl won 329 of the paper grid's 400 races instead of 364. The later
     waypoints are at top speed."""
     s = float(TRACK.checkpoint_s[5]) + 4.0
     me = _view_at(TRACK, 0, s, 2, 10.0, 5)

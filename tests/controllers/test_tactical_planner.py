@@ -152,7 +152,7 @@ def test_a_kart_at_a_hairpin_entry_enters_the_game_with_a_legal_move(behind: boo
     """A kart racing into the hairpin at checkpoint 17 of ``complex`` (6.4 m to brake to 5.6 m/s in the game
     calibrated to the racing line) at 13.5 m/s:
     carried into the game at that speed it had no legal move, and every plan for it was padding (10 of 108
-    plans of a race, session 11). Whether it is a checkpoint behind the leader (advanced to it) or predicted
+    plans of a race). Whether it is a checkpoint behind the leader (advanced to it) or predicted
     at the hairpin's entry itself, it now enters at a speed the game can brake from, and the search plans it."""
     track = TRACKS["complex"]
     planner = TacticalPlanner(track, PAPER_KART, iterations=500, seed=1, line=optimise_racing_line(track, PAPER_KART))
