@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
+from typer.core import TyperCommand
 
 from karting.output import add_row, console, error, print_json, table
 from karting.tournament_cli import app as tournament_app
@@ -236,10 +237,57 @@ def serve(
     run_server(Settings(**overrides))  # type: ignore[arg-type]
 
 
-@app.command()
+# options of ``karting train`` that a --config file does not set: the agent names the table to read, and --json
+# is how this run prints, not how it trains
+NOT_IN_TRAIN_CONFIG = ("agent", "config", "as_json")
+
+
+class TrainCommand(TyperCommand):
+    """``karting train``: every option not given on the command line is taken from ``--config`` when the file
+    sets it (:func:`controllers.rl.config.read_train_options`), checked as the flag's value would be."""
+
+    # ctx: the click context typer makes (its own vendored click in recent typer, the click package in older)
+    def invoke(self, ctx: Any) -> Any:
+        """Fill the options from the file, then train."""
+        if ctx.params.get("config") is not None:
+            _apply_train_config(ctx, Path(ctx.params["config"]))
+        return super().invoke(ctx)
+
+
+def _apply_train_config(ctx: Any, path: Path) -> None:
+    """Set ``ctx.params`` from the TOML file at ``path`` where the command line left an option at its default."""
+    from controllers.rl.config import read_train_options
+
+    params = {p.name: p for p in ctx.command.params if p.name and p.name not in NOT_IN_TRAIN_CONFIG}
+    try:
+        options = read_train_options(path, str(ctx.params.get("agent")), params)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--config") from None
+    for name, value in options.items():
+        source = ctx.get_parameter_source(name)
+        if source is not None and source.name != "DEFAULT":  # given on the command line: the flag wins
+            continue
+        flag = bool(getattr(params[name], "is_flag", False))
+        if isinstance(value, bool) != flag:  # TOML's true / false only for on/off flags, never for a number
+            wanted = "true or false" if flag else "a value, not true / false"
+            raise typer.BadParameter(f"{path}: {name}: expected {wanted}, got {value!r}", param_hint="--config")
+        try:
+            ctx.params[name] = params[name].process_value(ctx, value)
+        except typer.BadParameter as exc:
+            raise typer.BadParameter(f"{path}: {name}: {exc.message}", param_hint="--config") from None
+
+
+@app.command(cls=TrainCommand)
 def train(
     agent: Annotated[str, typer.Argument(help="mcts-rl, fixed-rl or e2e")],
-    out: Annotated[Path | None, typer.Option(help="output folder (default results/rl/AGENT)")] = None,
+    config: Annotated[
+        Path | None,
+        typer.Option(
+            help="read the options from this TOML file (keys: the options' names; a table named after an agent: "
+            "that agent's own); a flag given here overrides the file. Example: controllers/rl/configs/shipped.toml"
+        ),
+    ] = None,
+    out: Annotated[Path | None, typer.Option(help="output folder (default runs/rl/AGENT)")] = None,
     steps: Annotated[int, typer.Option(help="environment steps in all (the paper: 8M)")] = 8_000_000,
     races: Annotated[int, typer.Option(help="races simulated together, one learning kart each")] = 128,
     seed: Annotated[int, typer.Option()] = 0,
@@ -294,7 +342,7 @@ def train(
     from controllers.rl.train import train as run_training
 
     kind = agent_kind(agent)
-    folder = out or Path("results") / "rl" / kind
+    folder = out or Path("runs") / "rl" / kind
     ppo = PPOConfig(
         total_steps=steps,
         n_races=races,

@@ -9,8 +9,11 @@ every 2 physics steps (25 Hz), observations stacked over 4 decisions, a horizon 
 from __future__ import annotations
 
 import math
+import tomllib
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass, field, fields, replace
-from typing import Literal
+from pathlib import Path
+from typing import Any, Literal
 
 AgentKind = Literal["mcts-rl", "fixed-rl", "e2e"]
 AGENT_KINDS: tuple[AgentKind, ...] = ("mcts-rl", "fixed-rl", "e2e")
@@ -159,3 +162,44 @@ class PPOConfig:
     # 1: on a 2-core machine shared with other work, two OpenMP threads waiting on each other made a 512-sample
     # gradient step of the 3x128 nets 40x slower (53 ms against 1.4 ms, measured)
     torch_threads: int = 1
+
+
+def read_train_options(path: Path, agent: str, known: Collection[str]) -> dict[str, Any]:
+    """The options of ``karting train AGENT`` in the TOML file at ``path``, by option name (``wall_hit_penalty``).
+
+    Top-level keys apply to every agent; a table named after an agent (``[e2e]``) adds or replaces keys for that
+    agent only. A key is an option's name with ``_`` or ``-`` (``wall-hit-penalty``), its value what the flag
+    takes (``reward_weight`` a list of ``NAME=VALUE`` strings); paths are read from the working directory, as
+    on the command line. A ValueError names the first problem: unreadable or not TOML, a key outside ``known``
+    (named), a table named after no agent, a key given twice in one place.
+    """
+    try:
+        data = tomllib.loads(path.read_text())
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: not TOML: {exc}") from None
+    for name, value in data.items():
+        if isinstance(value, dict) and name not in AGENT_KINDS:
+            raise ValueError(
+                f"{path}: unknown key {name!r} (a table is an agent's own options: one of {list(AGENT_KINDS)})"
+            )
+    shared = {key: value for key, value in data.items() if not isinstance(value, dict)}
+    options = _named_options(path, "", shared, known)
+    own = data.get(agent)
+    if isinstance(own, dict):
+        options.update(_named_options(path, f"[{agent}] ", own, known))
+    return options
+
+
+def _named_options(path: Path, where: str, entries: Mapping[str, Any], known: Collection[str]) -> dict[str, Any]:
+    """``entries`` by option name (``-`` read as ``_``); a ValueError names an unknown or repeated key."""
+    options: dict[str, Any] = {}
+    for key, value in entries.items():
+        name = key.replace("-", "_")
+        if name not in known:
+            raise ValueError(f"{path}: unknown key {where}{key!r}; the options are {sorted(known)}")
+        if name in options:
+            raise ValueError(f"{path}: {where}{key!r} is given twice (as - and as _)")
+        options[name] = value
+    return options
