@@ -17,6 +17,7 @@ import json
 import os
 import re
 import shlex
+import textwrap
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,6 +34,7 @@ END = "<!-- results:end -->"
 MANIFEST_FILE = "manifest.json"
 README_FILE = "README.md"
 README_TABLE_FILE = "readme_table.md"  # the README's results table, as put between its markers
+WIDTH = 116  # prose line width of the Markdown written
 
 
 class PublishError(ValueError):
@@ -106,18 +108,28 @@ def _short(commit: str) -> str:
     return commit[:10] if commit != "unknown" else commit
 
 
+def _wrap(text: str, indent: str = "") -> str:
+    """``text`` wrapped at :data:`WIDTH` (Markdown paragraphs and list items; code spans are not split)."""
+    return textwrap.fill(text, WIDTH, subsequent_indent=indent, break_long_words=False, break_on_hyphens=False)
+
+
+def _races(n: int) -> str:
+    return f"{n} race" if n == 1 else f"{n} races"
+
+
 def readme_table(stats: TournamentStats, tournament: Tournament, folder: str) -> str:
     """The README's results table: wins over every track, row agent against column agent, and what it is."""
     recorded = tournament.manifest
     assert recorded is not None
     spec = tournament.spec
     tracks = ", ".join(f"`{t}`" for t in spec["tracks"])
-    return (
-        f"The round robin of `{tournament.id}` ({spec['races_per_pair']} races per pair on {tracks}; commit "
-        f"{_short(recorded.commit)}): wins over all tracks, row agent against column agent (`*`: significant at "
-        f"p = 0.05). Written by `karting tournament publish`; agents, parameters and per-track tables in "
-        f"[`{folder}`]({folder}/README.md).\n\n{_markdown(totals_rows(stats.tracks[COMBINED]))}"
+    text = _wrap(
+        f"Tournament `{tournament.id}`: {_races(spec['races_per_pair'])} per pair and track on {tracks}, commit "
+        f"{_short(recorded.commit)}. Wins over all tracks, row agent against column agent (`*`: significant at "
+        f"p = 0.05). Written by `karting tournament publish`; the agents' parameters, the conditions and the "
+        f"per-track tables are in [`{folder}/`]({folder}/README.md)."
     )
+    return f"{text}\n\n{_markdown(totals_rows(stats.tracks[COMBINED]))}"
 
 
 def run_command(tournament_id: str, spec: Mapping[str, Any]) -> str:
@@ -133,34 +145,54 @@ def run_command(tournament_id: str, spec: Mapping[str, Any]) -> str:
     return shlex.join(args)
 
 
+def _what_was_run(tournament: Tournament, race_commits: Mapping[str, int]) -> list[str]:
+    """The bullets of ``README.md``'s "What was run"."""
+    recorded = tournament.manifest
+    assert recorded is not None
+    c = recorded.conditions
+    dirty = {True: " (tracked files differed from it)", False: "", None: " (whether tracked files differed: unknown)"}
+    commits = ", ".join(f"{_short(commit)} ({_races(n)})" for commit, n in race_commits.items())
+    laps = ", ".join(f"`{track}` {n}" for track, n in dict(c.get("laps") or {}).items())
+    lanes = dict(c.get("start_lanes") or {})
+    background = dict(c.get("background_planner") or {})
+    settings_of = background.pop("settings_of", "-")
+    planned = ", ".join(f"`{a}`" for a in c.get("background_planners") or []) or "none"
+    machine = dict(recorded.machine)
+    items = [
+        f"**Code:** commit {recorded.commit}{dirty[recorded.dirty]}. Races ran at {commits}.",
+        f"**Races:** {len(tournament.races)}, {c.get('races_per_pair')} per pair and track; laps: {laps}; time limit "
+        f"{c.get('time_limit')} s.",
+        f"**Starts:** the pair's first agent in lane {lanes.get('even_races', ['?'])[0]} in even races, lane "
+        f"{lanes.get('odd_races', ['?'])[0]} in odd ones; launch spread {c.get('start_spread')} s; seed "
+        f"{c.get('seed')} (a race's seed: `{c.get('race_seeds')}`).",
+        f"**Plans:** applied {c.get('plan_latency')} s after they are asked for. Δr and Δv of agents without a "
+        f"planner ({planned}) are measured against an MCTS planner in the background with "
+        f"`{settings_of}`'s settings ({json.dumps(background)}).",
+        f"**Kart:** preset `{recorded.kart_preset}` (its values in `manifest.json`).",
+        f"**Machine:** Python {machine.get('python')}, {machine.get('platform')}, {machine.get('cpus')} CPUs.",
+    ]
+    return [_wrap(f"- {item}", "  ") for item in items]
+
+
 def results_readme(stats: TournamentStats, tournament: Tournament, race_commits: Mapping[str, int]) -> str:
     """The published folder's ``README.md``: what was run (code, agents with every parameter, conditions,
     machine) and the tables."""
     recorded = tournament.manifest
     assert recorded is not None
-    c = recorded.conditions
-    dirty = {True: " (tracked files differed from it)", False: "", None: " (unknown whether it was clean)"}
-    commits = ", ".join(f"{_short(commit)} ({n})" for commit, n in race_commits.items())
     lines = [
         f"# Results: tournament `{tournament.id}`",
         "",
-        f"Written by `karting tournament publish {tournament.id}` from the stored tournament; not edited by hand. "
-        "`tests/test_stale_results.py` fails when the agents below no longer resolve to the same parameters and "
-        "weights in the registry, or when a file here differs from `manifest.json`.",
+        _wrap(
+            f"Written by `karting tournament publish {tournament.id}` from the stored tournament; not edited by "
+            "hand. `tests/test_stale_results.py` fails when the agents below no longer resolve to the same "
+            "parameters and weights in the registry, or when a file here differs from `manifest.json`."
+        ),
         "",
         "## What was run",
         "",
         f"    {run_command(tournament.id, tournament.spec)}",
         "",
-        f"- **Code:** commit {recorded.commit}{dirty[recorded.dirty]}; its races ran at {commits} (races).",
-        f"- **Races:** {len(tournament.races)}: {c.get('races_per_pair')} per pair and track on "
-        f"{', '.join(c.get('tracks', []))}; laps {c.get('laps')}; time limit {c.get('time_limit')} s.",
-        f"- **Starts:** lanes {c.get('start_lanes')}; launch spread {c.get('start_spread')} s; seed {c.get('seed')} "
-        f"(each race's: {c.get('race_seeds')}).",
-        f"- **Plans:** latency {c.get('plan_latency')} s; background planner for Δr / Δv of "
-        f"{c.get('background_planners')}: {c.get('background_planner')}.",
-        f"- **Kart:** preset `{recorded.kart_preset}` ({json.dumps(dict(recorded.kart))}).",
-        f"- **Machine:** {json.dumps(dict(recorded.machine))}.",
+        *_what_was_run(tournament, race_commits),
         "",
         "## Agents (every public parameter)",
         "",
