@@ -34,6 +34,7 @@ from sim_core.world import grid_lanes
 
 MANIFEST_VERSION = 1
 UNKNOWN = "unknown"  # the commit outside a git checkout
+COMMIT_VARIABLE = "KARTING_COMMIT"  # names the commit where the code is not a git checkout (an image, a copy)
 HUMAN = "human"  # a kart driven over the server's drive websocket: no registered controller
 ROOT = Path(__file__).resolve().parents[1]  # the checkout this code runs from (when it is one)
 
@@ -165,16 +166,17 @@ def _sha256(path: Path) -> str:
 
 @lru_cache(maxsize=1)
 def source_commit() -> tuple[str, bool | None]:
-    """The git commit of the code this process runs (``"unknown"`` outside a checkout) and whether tracked files
-    differ from it. Asked once per process: the code loaded is the code it started with."""
+    """The git commit of the code this process runs and whether tracked files differ from it. Outside a checkout
+    (an image, a copy of the tree): the commit named by :data:`COMMIT_VARIABLE` if set, else ``"unknown"``; whether
+    files differ is then unknown (``None``). Asked once per process: the code loaded is the code it started with."""
     try:
         top = _git("rev-parse", "--show-toplevel")
         if Path(top).resolve() != ROOT:
-            return UNKNOWN, None  # installed inside some other repository: not ours
+            raise OSError(f"{ROOT} is not the top of a checkout")  # installed inside some other repository
         commit = _git("rev-parse", "HEAD")
         changed = _git("status", "--porcelain", "--untracked-files=no")
     except (OSError, subprocess.SubprocessError):
-        return UNKNOWN, None
+        return os.environ.get(COMMIT_VARIABLE) or UNKNOWN, None
     return commit, bool(changed)
 
 

@@ -13,7 +13,16 @@ from typing import Any
 import pytest
 from typer.testing import CliRunner
 
-from arena.manifest import AgentManifest, Manifest, describe_agent, format_agent, stale_agents
+import arena.manifest as manifest_module
+from arena.manifest import (
+    COMMIT_VARIABLE,
+    AgentManifest,
+    Manifest,
+    describe_agent,
+    format_agent,
+    source_commit,
+    stale_agents,
+)
 from arena.tournament import TournamentSpec, run_tournament
 from controllers.parameters import parameter
 from controllers.registry import REGISTRY, ControllerSpec, controller_spec, parse_agent
@@ -174,3 +183,32 @@ def test_a_live_race_and_a_headless_race_carry_their_manifests() -> None:
     headless = json.loads(done.output.strip().splitlines()[-1])["manifest"]
     assert headless["kind"] == "race" and headless["conditions"]["laps"] == 1 and headless["conditions"]["seed"] == 2
     assert headless["agents"][1]["parameters"] == every_parameter("lane-follower:lookahead_time=0.5")
+
+
+def test_the_commit_is_gits_or_named_outside_a_checkout(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    source_commit.cache_clear()
+    commit, dirty = source_commit()
+    if (manifest_module.ROOT / ".git").exists():
+        assert len(commit) == 40 and int(commit, 16) >= 0 and dirty in (True, False)
+    monkeypatch.setattr(manifest_module, "ROOT", tmp_path)  # a copy of the tree, not a checkout
+    monkeypatch.delenv(COMMIT_VARIABLE, raising=False)
+    source_commit.cache_clear()
+    assert source_commit() == ("unknown", None)
+    monkeypatch.setenv(COMMIT_VARIABLE, "0123abc")
+    source_commit.cache_clear()
+    assert source_commit() == ("0123abc", None)
+    source_commit.cache_clear()
+
+
+def test_the_command_line_shows_and_writes_a_tournaments_manifest(tmp_path: Path) -> None:
+    db = str(tmp_path / "k.db")
+    args = ["tournament", "run", "--agents", f"{SLOW},lane-follower", "--tracks", "oval", "--races-per-pair", "1"]
+    args += ["--laps", "1", "--time-limit", "30", "--workers", "1", "--id", "m", "--db", db]
+    done = CliRunner().invoke(app, [*args, "--json"])
+    assert done.exit_code == 0, done.output
+    shown = json.loads(done.output.strip().splitlines()[-1])["manifest"]
+    assert shown["kind"] == "tournament" and shown["agents"][0]["parameters"] == every_parameter(SLOW)
+    out = tmp_path / "report"
+    report = CliRunner().invoke(app, ["tournament", "report", "m", "--db", db, "--out", str(out)])
+    assert report.exit_code == 0, report.output
+    assert json.loads((out / "manifest.json").read_text()) == shown
