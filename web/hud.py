@@ -14,7 +14,7 @@ from web.frame import KART_COLORS, KartFrame, RaceFrame
 from web.meshes import CHECKPOINT_COLOR, PREDICTION_COLOR, WAYPOINT_COLOR
 
 _MARKDOWN_ESCAPES = str.maketrans({c: "\\" + c for c in "\\`*_[]|#!~"})
-_TABLE_HEAD = "| kart | pos | lap | km/h | at fault | illegal LC | ctrl faults |\n|---|---|---|---|---|---|---|\n"
+_TABLE_HEAD = "| kart | pos | lap | km/h | at fault | illegal LC | controller faults |\n|---|---|---|---|---|---|---|\n"
 
 
 def markdown_text(text: str) -> str:
@@ -83,5 +83,5 @@ def legend_text() -> str:
     )
     return (
         f"{legend}<br/>at fault: collisions at fault · illegal LC: illegal lane changes · "
-        "ctrl faults: controller faults (errors, hangs, missed deadlines, failed plans)"
+        "controller faults: errors, hangs, missed deadlines, failed plans"
     )

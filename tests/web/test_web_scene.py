@@ -439,7 +439,7 @@ def test_labels_name_the_controller_once_and_the_hud_says_which_faults() -> None
     assert kart_label("Alice", "human") == "Alice (human)"
     assert (laps_text(1), laps_text(3)) == ("1 lap", "3 laps")
     table = hud_text("oval", [("A", "lane-follower")], None)
-    assert "| at fault | illegal LC | ctrl faults |" in table
+    assert "| at fault | illegal LC | controller faults |" in table
     assert "collisions at fault" in legend_text() and "controller faults" in legend_text()
 
 

@@ -55,7 +55,7 @@ function showStandings(race, result, report) {
   const byIndex = new Map(report ? report.karts.map((k) => [k.index, k]) : []);
   const head = el("thead", {}, el("tr", {}, ["pos", "kart", "finish [s]", "gap [s]", "laps", "best lap [s]",
     "top speed [km/h]", "collisions at fault", "illegal lane changes", "safety score", "wall hits", "passes",
-    "driver faults"].map((h) => el("th", {}, h))));
+    "controller faults"].map((h) => el("th", {}, h))));
   const rows = [...result.karts].sort((a, b) => a.position - b.position).map((k) => {
     const figures = byIndex.get(k.index);
     const best = figures && figures.best_lap ? figures.laps.find((l) => l.lap === figures.best_lap) : null;
