@@ -6,6 +6,7 @@ published is refused before anything is written."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -132,6 +133,13 @@ def test_what_cannot_be_published_is_refused_before_anything_is_written(db: Path
     old = stored(db, "pub")
     with pytest.raises(PublishError, match="no manifest"):
         publish(Tournament(old.id, old.spec, old.total, None, old.races, old.race_manifests), out, None)
+    first = old.manifest.agents[0] if old.manifest is not None else None
+    assert first is not None and old.manifest is not None
+    older = replace(first, parameters={**first.parameters, next(iter(first.parameters)): "older"})
+    stale = replace(old, manifest=replace(old.manifest, agents=(older, *old.manifest.agents[1:])))
+    with pytest.raises(PublishError) as refused:  # its agents resolve otherwise now, and its races raced others
+        publish(stale, out, None)
+    assert "stale: fixed-lqng:" in str(refused.value) and "race 0 raced other agents" in str(refused.value)
     assert not out.exists() and readme.read_text() == "# Project without markers\n"
     out.mkdir()
     (out / "README.md").write_text("# Results\n\nNone yet.\n")  # a note without figures: written over
