@@ -97,7 +97,9 @@ def _replay_scenes(recorded: RecordedRaces, settings: Settings) -> ReplayScenes:
     return scenes
 
 
-def _web_router(races: Callable[[], LiveRaces], replays: StoredReplays) -> APIRouter | None:
+def _web_router(
+    races: Callable[[], LiveRaces], replays: StoredReplays, tournaments: Callable[[], TournamentRunner]
+) -> APIRouter | None:
     try:
         from web.routes import RaceState, make_web_router
     except ImportError as exc:
@@ -108,7 +110,12 @@ def _web_router(races: Callable[[], LiveRaces], replays: StoredReplays) -> APIRo
         status = races().status(race_id)
         return RaceState(status.value, not status.live) if status is not None else None
 
-    router: APIRouter = make_web_router(lambda race_id: races().scene_port(race_id), race_state, replays)
+    def tournament_known(tournament_id: str) -> bool:
+        return tournaments().store.exists(tournament_id)
+
+    router: APIRouter = make_web_router(
+        lambda race_id: races().scene_port(race_id), race_state, replays, tournament_known
+    )
     return router
 
 
@@ -216,7 +223,8 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
     truthful_openapi(app, settings, catalogue, track_names)
     app.state.tournament_plots = TournamentPlots()
     app.include_router(api_router)
-    web = _web_router(lambda: app.state.races, StoredReplays(lambda: app.state.races, lambda: app.state.replay_scenes))
+    replays = StoredReplays(lambda: app.state.races, lambda: app.state.replay_scenes)
+    web = _web_router(lambda: app.state.races, replays, lambda: app.state.tournaments)
     if web is not None:
         app.include_router(web)
     return app

@@ -222,6 +222,11 @@ class TournamentDatabase:
                 )
             )
 
+    def exists(self, tournament_id: str) -> bool:
+        """Whether there is a tournament ``tournament_id``."""
+        with Session(self.db.engine) as session:
+            return session.get(TournamentRow, tournament_id) is not None
+
     def get(self, tournament_id: str) -> StoredTournament | None:
         """One tournament, or ``None``."""
         with Session(self.db.engine) as session:

@@ -154,14 +154,19 @@ def make_web_router(
     scene_port: Callable[[str], int | None],
     race_state: Callable[[str], RaceState | None],
     replays: ReplayDirectory | None = None,
+    tournament_known: Callable[[str], bool] | None = None,
 ) -> APIRouter:
     """Routes of the web pages; ``scene_port(race_id)`` gives a race's viser port (``None``: no live viewer),
-    ``race_state(race_id)`` its state (``None``: no such race; a blocking call, made in a worker thread) and
-    ``replays`` the stored races' replay scenes (``None``: no replay player).
+    ``race_state(race_id)`` its state (``None``: no such race; a blocking call, made in a worker thread),
+    ``replays`` the stored races' replay scenes (``None``: no replay player) and ``tournament_known(id)`` whether
+    a tournament exists (blocking, made in a worker thread; ``None``: every id is served its page).
+
+    A page of something that does not exist answers 404, with a page that says so.
 
     * ``GET /``: the start page (races, results, launch form);
     * ``GET /assets/{name}``: the pages' scripts and styles;
-    * ``GET /races/{race_id}``: the race's page (standings, laps, charts, incidents; its script reads the API);
+    * ``GET /races/{race_id}``: the race's page (standings, laps, charts, incidents; its script reads the API;
+      404 for an unknown race, with the same page, whose script says there is no such race);
     * ``GET /races/{race_id}/viewer/``: a race over with a stored replay redirects to its replay player; else
       viser's client page while the race's scene is open; otherwise a page that waits for it (race starting),
       says the race is over (with links to its result and replay) or, with 404, that there is no such race;
@@ -174,7 +179,8 @@ def make_web_router(
     * ``GET /races/{race_id}/drive?kart=K&token=T``: the drive page (viewer + keyboard input; 404 page for an
       unknown race);
     * ``GET /tournaments``: the tournaments page (stored tournaments, leaderboard, launch form);
-    * ``GET /tournaments/{tournament_id}``: a tournament's page (progress, races, tables and plots).
+    * ``GET /tournaments/{tournament_id}``: a tournament's page (progress, races, tables and plots; 404 for an
+      unknown tournament, with the same page, whose script says there is no such tournament).
     """
     router = APIRouter(include_in_schema=False)
 
@@ -196,9 +202,10 @@ def make_web_router(
         return RedirectResponse(f"/races/{race_id}/viewer/", status_code=307)
 
     @router.get("/races/{race_id}", response_class=HTMLResponse)
-    def race_page(race_id: str) -> Response:
+    async def race_page(race_id: str) -> Response:
         """A race's page (the id is read from the URL by its script, which says when there is no such race)."""
-        return HTMLResponse(_static("race.html"), headers=NO_CACHE)
+        known = await asyncio.to_thread(race_state, race_id) is not None
+        return HTMLResponse(_static("race.html"), status_code=200 if known else 404, headers=NO_CACHE)
 
     @router.get("/races/{race_id}/viewer/", response_class=HTMLResponse)
     async def viewer_page(race_id: str, request: Request) -> Response:
@@ -237,9 +244,10 @@ def make_web_router(
         return HTMLResponse(_static("tournaments.html"), headers=NO_CACHE)
 
     @router.get("/tournaments/{tournament_id}", response_class=HTMLResponse)
-    def tournament_page(tournament_id: str) -> Response:
+    async def tournament_page(tournament_id: str) -> Response:
         """A tournament's page (the id is read from the URL by its script, which says when there is none)."""
-        return HTMLResponse(_static("tournament.html"), headers=NO_CACHE)
+        known = tournament_known is None or await asyncio.to_thread(tournament_known, tournament_id)
+        return HTMLResponse(_static("tournament.html"), status_code=200 if known else 404, headers=NO_CACHE)
 
     return router
 
