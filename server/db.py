@@ -22,6 +22,7 @@ from server.snapshot import DriverState, RaceSnapshot, Standing
 from server.status import LIVE_STATUSES, RaceStatus
 from server.ticks import TickSummary
 from sim_core.params import DT
+from sim_core.world import grid_lanes
 
 
 class _Base(DeclarativeBase):
@@ -65,6 +66,12 @@ class StoredRace:
     result: RaceRecord | None
     tick_stats: TickSummary | None
 
+    def lanes_used(self) -> tuple[int, ...]:
+        """Every kart's start lane: as its result recorded them, else as asked, else the defaults."""
+        recorded = self.result.start_lanes if self.result is not None else None
+        asked = tuple(self.start_lanes) if self.start_lanes is not None else None
+        return recorded or grid_lanes(len(self.karts), asked)
+
     def snapshot(self) -> RaceSnapshot:
         """The race as the API shows it: its result's standings and faults (a human kart's driver is gone)."""
         record = self.result
@@ -82,7 +89,7 @@ class StoredRace:
             laps=self.laps,
             seed=self.seed,
             kart_preset=self.kart_preset,
-            start_lanes=tuple(self.start_lanes) if self.start_lanes is not None else None,
+            start_lanes=self.lanes_used(),
             karts=tuple(self.karts),
             time=self.duration or 0.0,
             step=round((self.duration or 0.0) / DT),

@@ -223,7 +223,10 @@ class RaceDetailOut(RaceSummaryOut):
 
     seed: int
     kart_preset: str
-    start_lanes: list[int] | None
+    start_lanes: list[int] = Field(
+        description="each kart's start lane, 1-based, by kart index: as the race asked, else the defaults "
+        "(lanes 2, 3, 1, 4 in each row of four)"
+    )
     step: int
     drivers: list[DriverStatusOut]
     tick_stats: TickStatsOut | None

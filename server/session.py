@@ -174,7 +174,7 @@ class RaceSession:
             laps=config.laps,
             seed=config.seed,
             kart_preset=config.kart_preset,
-            start_lanes=config.start_lanes,
+            start_lanes=grid_lanes(len(config.karts), config.start_lanes),
             karts=config.karts,
             time=frame.time if frame is not None else 0.0,
             step=frame.step if frame is not None else 0,

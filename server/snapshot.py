@@ -82,7 +82,7 @@ class RaceSnapshot:
     laps: int
     seed: int
     kart_preset: str
-    start_lanes: tuple[int, ...] | None
+    start_lanes: tuple[int, ...]  # every kart's start lane, by kart index (the defaults when none were asked)
     karts: tuple[KartEntry, ...]
     time: float  # [s] race time
     step: int

@@ -132,7 +132,7 @@ def detail_view(snapshot: RaceSnapshot, viewer: bool, viewer_open: bool) -> Race
         **summary_view(snapshot).model_dump(),
         seed=snapshot.seed,
         kart_preset=snapshot.kart_preset,
-        start_lanes=list(snapshot.start_lanes) if snapshot.start_lanes is not None else None,
+        start_lanes=list(snapshot.start_lanes),
         step=snapshot.step,
         drivers=[driver_view(d) for d in snapshot.drivers],
         tick_stats=tick_stats_view(snapshot.tick_stats),

@@ -1,5 +1,6 @@
 """The web pages through the real server (``create_app`` under uvicorn, 3D views off): a page of a race or a
-tournament that does not exist answers 404 with a page that says so, and one that exists answers 200."""
+tournament that does not exist answers 404 with a page that says so, and one that exists answers 200; the race
+page's start lanes are the lanes the karts started in, asked for or not, live and stored."""
 
 from __future__ import annotations
 
@@ -8,13 +9,14 @@ from pathlib import Path
 
 import httpx
 import pytest
-from support.live_server import LiveServer, server_settings, start_race
+from support.live_server import LiveServer, server_settings, start_race, wait_for, wait_status
 
 from arena.tournament import TournamentSpec
 from server.db import RaceDatabase
 from server.tournament_db import TournamentDatabase
 
 WAITING_RACE = {"track": "oval", "laps": 1, "karts": [{"controller": "human"}, {"controller": "lane-follower"}]}
+AI_RACE = {"track": "oval", "laps": 1, "karts": [{"controller": "lane-follower"}] * 3}
 
 
 @pytest.fixture(scope="module")
@@ -24,7 +26,8 @@ def db_path(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def client(db_path: Path) -> Iterator[httpx.Client]:
-    settings = server_settings(db_path, controller_hosts=0, human_wait_s=600.0)
+    # a race over is dropped from memory at once: its page then shows what the database stored
+    settings = server_settings(db_path, controller_hosts=0, human_wait_s=600.0, keep_finished_s=0.2)
     with LiveServer(settings) as server, server.client() as c:
         yield c
 
@@ -76,3 +79,17 @@ def test_the_pages_of_a_race_that_exists_are_found(client: httpx.Client) -> None
         assert client.get(race["karts"][0]["drive_url"]).status_code == 200
     finally:
         client.post(f"/api/races/{race['id']}/stop")
+
+
+@pytest.mark.parametrize(("asked", "used"), [(None, [2, 3, 1]), ([3, 1, 4], [3, 1, 4])])
+def test_the_race_shows_the_start_lanes_used(client: httpx.Client, asked: list[int] | None, used: list[int]) -> None:
+    race = start_race(client, **AI_RACE, start_lanes=asked)
+    live = wait_status(client, race["id"], ("running", "finished"), 60)
+    assert live["start_lanes"] == used  # (race.js shows race.start_lanes)
+    wait_status(client, race["id"], ("finished",), 120)
+    result = client.get(f"/api/races/{race['id']}/result").json()
+    assert result["start_lanes"] == used
+
+    # once the server dropped the race from memory (its ticks' raw jitter goes with it), from the database
+    wait_for(lambda: client.get(f"/api/races/{race['id']}/ticks").json()["recent_jitter_ms"] == [], 10)
+    assert client.get(f"/api/races/{race['id']}").json()["start_lanes"] == used

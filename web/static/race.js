@@ -36,7 +36,7 @@ function showSummary(race) {
   document.getElementById("title").textContent = `${race.track} · ${race.laps} ${race.laps === 1 ? "lap" : "laps"}`;
   document.title = `Race ${race.id} · HeadToHead Karting`;
   const spec = [["track", race.track], ["laps", race.laps], ["seed", race.seed], ["kart preset", race.kart_preset],
-    ["start lanes", race.start_lanes ? race.start_lanes.join(", ") : "default"], ["race time", `${seconds(race.time)} s`],
+    ["start lanes", race.start_lanes.join(", ")], ["race time", `${seconds(race.time)} s`],
     ["started", new Date(race.created_at).toLocaleString()]];
   document.getElementById("spec").replaceChildren(...spec.flatMap(([k, v]) => [el("dt", {}, k), el("dd", {}, String(v))]));
   const live = !OVER.has(race.status);
