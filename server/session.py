@@ -281,8 +281,8 @@ class RaceSession:
             if ready_by is None and now >= joined_by:
                 # a driver who never came: the race is called off (it would run with a parked kart)
                 absent = ", ".join(str(d.index) for d in humans if not d.ever_connected)
-                wait_s = self.settings.human_wait_s
-                self.stop(RaceStatus.CANCELLED, f"no driver joined kart(s) {absent} within {wait_s:g} s")
+                wait_s, setting = self.settings.human_wait_s, self.settings.env_name("human_wait_s")
+                self.stop(RaceStatus.CANCELLED, f"no driver joined kart(s) {absent} within {wait_s:g} s ({setting})")
                 return
             if ready_by is not None and now >= ready_by:
                 late = ", ".join(d.name for d in self.waiting_for())

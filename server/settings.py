@@ -40,8 +40,11 @@ class Settings(BaseSettings):
     drive_timeout_s: float = Field(
         default=0.5, gt=0.0, description="[s] wall time without driver input before the kart brakes"
     )
+    # the one statement of how long a race waits for its drivers: pages and documents cite the setting's name
     human_wait_s: float = Field(
-        default=60.0, ge=0.0, description="[s] a race waits this long for its human drivers, then is cancelled"
+        default=60.0,
+        ge=0.0,
+        description="[s] a race waits this long for its human drivers to connect, then is cancelled",
     )
     view_ready_wait_s: float = Field(
         default=30.0,
@@ -136,6 +139,13 @@ class Settings(BaseSettings):
                 return json.loads(value)
             return [part.strip() for part in value.split(",") if part.strip()]
         return value
+
+    @classmethod
+    def env_name(cls, field: str) -> str:
+        """The environment variable that sets ``field`` (``human_wait_s``: ``KARTING_HUMAN_WAIT_S``)."""
+        if field not in cls.model_fields:
+            raise KeyError(field)
+        return (cls.model_config.get("env_prefix", "") + field).upper()
 
     def served_hosts(self) -> list[str]:
         """The Host names served: ``allowed_hosts``, or by default the loopback names when bound to loopback and

@@ -36,7 +36,7 @@ def test_a_race_whose_driver_never_comes_is_cancelled(client: httpx.Client) -> N
     assert ended["status"] == "cancelled" and ended["step"] == 0  # it never ran
     result = client.get(f"/api/races/{race['id']}/result").json()
     assert result["status"] == "cancelled"
-    assert result["end_reason"] == f"no driver joined kart(s) 0 within {JOIN_S:g} s"
+    assert result["end_reason"] == f"no driver joined kart(s) 0 within {JOIN_S:g} s (KARTING_HUMAN_WAIT_S)"
     assert not any(k["finished"] for k in result["karts"])
     live = [r for r in client.get("/api/races").json() if r["id"] == race["id"]]
     assert live and live[0]["status"] == "cancelled"  # its live slot is free
