@@ -98,9 +98,11 @@ def run_race(
         drivers = [make_agent(name) for name in spec.controllers]
     elif len(drivers) != n:
         raise ValueError(f"{len(drivers)} drivers for {n} karts")
+    # each driver's planning capability, looked up once (a runtime Protocol check costs microseconds a call)
+    planning = [driver if isinstance(driver, PlanningDriver) else None for driver in drivers]
     for k, driver in enumerate(drivers):
-        if isinstance(driver, PlanningDriver):
-            driver.plan_latency = spec.plan_latency
+        if (planner := planning[k]) is not None:
+            planner.plan_latency = spec.plan_latency
         driver.reset(RaceContext(track, params.kart, k, n, world.lane_change_limit, spec.seed * 1000 + k))
     recorder = ReplayRecorder(track.name, n) if record else None
     if recorder is not None:
@@ -120,9 +122,9 @@ def run_race(
             if (step % hold[k] == 0 or launching) and not observations[k].me.finished:
                 action = driver.act(observations[k])
                 actions[0, k] = (action.steer, action.throttle)
-                if isinstance(driver, PlanningDriver) and driver.plans_applied != applied[k]:
-                    applied[k] = driver.plans_applied
-                    _show_plan(world, k, driver, recorder, step)
+                if (planner := planning[k]) is not None and planner.plans_applied != applied[k]:
+                    applied[k] = planner.plans_applied
+                    _show_plan(world, k, planner, recorder, step)
             if waiting:
                 actions[0, k] = (0.0, 0.0)  # standing (negative throttle reverses); its driver plans all the same
         world.step(actions)

@@ -216,13 +216,3 @@ def test_it_keeps_station_behind_a_kart_drifting_into_its_path() -> None:
         )
 
     assert _race_with_tracker(spec, "e2e", no_prediction)[0] == 1
-
-
-def test_it_yields_to_a_faster_kart_cutting_across_from_alongside() -> None:
-    """A lane-3 start on complex against fixed-rl (seed 1): on its second lap fixed-rl passes mcts-lqng round the
-    outside of the curve after the second hairpin, 3.7 m/s faster, and cuts in 2.2 m ahead of it. Braking at once
-    for a kart 2 m/s faster that is alongside and will be in its path within 0.4 s, it lets it in; without the yield
-    it collides, at fault as the follower (the commonest collision at fault of a tracker without it)."""
-    spec = RaceSpec(track="complex", controllers=("mcts-lqng", "fixed-rl"), seed=1, start_lanes=(3, 2))
-    assert _race_with_tracker(spec, "fixed-rl")[0] == 0
-    assert _race_with_tracker(spec, "fixed-rl", _without(Yield))[0] == 1

@@ -24,10 +24,12 @@ from controllers.lq.traffic import (
 )
 from controllers.plan import Plan, Waypoint
 from controllers.racing_line import optimise_racing_line
-from sim_core.observation import KartView
-from sim_core.params import DT, PAPER_KART
+from sim_core import state as st
+from sim_core.observation import KartView, observe
+from sim_core.params import DT, PAPER_KART, SimParams
 from sim_core.track import Track
 from sim_core.track_io import get_track
+from sim_core.world import World
 
 OVAL = get_track("oval")
 BACK_STRAIGHT = 11  # the oval's back straight runs from checkpoint 10 to 16
@@ -282,3 +284,36 @@ def test_the_tracker_sorts_each_rule_into_its_role_and_keeps_the_presets_order()
     assert [type(r).__name__ for r in tracker._bounds] == ["LaneRuleGuard", "AlongsideDiscipline"]
     assert [type(r).__name__ for r in tracker._limits] == ["StationKeeping", "Yield"]
     assert [type(r).__name__ for r in tracker._steer_filters] == ["SteerRateLimit"]
+
+
+def _cut_in(rules: tuple[object, ...], ahead: float, across_deg: float, steer: float) -> list[int]:
+    """Collisions at fault (ego, other) of 3 s on the oval's back straight: the ego (mcts-lqng's tracker with
+    ``rules``) at 9 m/s in lane 2; a kart 2 m to its left and ``ahead`` m in front at 12 m/s, heading
+    ``across_deg`` toward it and steering ``steer`` for 0.5 s, at full throttle: a faster kart cutting in."""
+    world = World(OVAL, 1, 2, SimParams(kart=PAPER_KART))
+    s0, d0 = float(OVAL.checkpoint_s[BACK_STRAIGHT]) + 5.0, float(OVAL.lane_offsets(BACK_STRAIGHT + 1)[1])
+    world.clear_race(0)
+    world.place_kart(0, 0, s0, d0, speed=9.0)
+    world.place_kart(0, 1, s0 + ahead, d0 + 2.0, speed=12.0, heading_offset=-math.radians(across_deg))
+    world.sense()
+    tracker = LQNGTracker(MCTS_TRACKING, rules)  # type: ignore[arg-type]
+    tracker.reset(RaceContext(OVAL, PAPER_KART, 0, 2, OVAL.lane_change_limit, 0))
+    actions = np.zeros((1, 2, 2))
+    for step in range(150):
+        action = tracker.act(observe(world, 0)[0], None)
+        actions[0, 0] = (action.steer, action.throttle)
+        actions[0, 1] = (steer if step < 25 else 0.0, 1.0)
+        world.step(actions)
+    return [int(world.istate[0, k, st.I_FAULTS]) for k in range(2)]
+
+
+@pytest.mark.parametrize(("ahead", "across_deg", "steer"), [(0.5, 10.0, -0.1), (0.5, 15.0, -0.1), (1.0, 15.0, -0.2)])
+def test_a_kart_cutting_in_is_let_in_and_without_the_yield_the_follower_hits_it(
+    ahead: float, across_deg: float, steer: float
+) -> None:
+    """Placed karts: a kart 3 m/s faster cuts across from alongside into the ego's lane. mcts-lqng's tracker brakes
+    at once and lets it in, no collision; the same tracker without the yield runs into it, at fault as the kart
+    behind."""
+    without = tuple(rule for rule in MCTS_TRAFFIC if not isinstance(rule, Yield))
+    assert _cut_in(MCTS_TRAFFIC, ahead, across_deg, steer) == [0, 0]
+    assert _cut_in(without, ahead, across_deg, steer)[0] == 1
