@@ -23,7 +23,7 @@ TRAINING_TRACKS: tuple[str, ...] = (
     "train-oval-small-reversed",
     "train-oval-large-reversed",
     # not in the original's training set: without a corner under 10 m the agents ran wide into complex's
-    # 1-5 m hairpins and stuck against the wall (results/rl/README.md)
+    # 1-5 m hairpins and stuck against the wall
     "train-hairpins",
     "train-hairpins-reversed",
 )
@@ -153,11 +153,11 @@ class PPOConfig:
     seed: int = 0
     # running reward normalisation (VecNormalize norm_reward). Off in the spec (ML-Agents had none). With the
     # appendix's 50-per-ray wall penalty the value loss reaches ~1e5; normalised it stays ~1e-2 (measured), but
-    # on its own that did not get an agent driving: results/rl_interim/README.md
+    # on its own that did not get an agent driving
     normalise_reward: bool = False
     # initial log standard deviation of the Gaussian actions (SB3's default 0: std 1 over a [-1, 1] range). At
     # std 1 the steering noise alone slowed training rollouts to half the mean's speed and the std never fell
-    # in 2M steps (measured on the interim weights: results/rl_interim/README.md)
+    # in 2M steps (measured on interim weights)
     log_std_init: float = 0.0
     # 1: on a 2-core machine shared with other work, two OpenMP threads waiting on each other made a 512-sample
     # gradient step of the 3x128 nets 40x slower (53 ms against 1.4 ms, measured)
