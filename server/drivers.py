@@ -14,11 +14,13 @@ import logging
 import math
 import threading
 import time
-from collections.abc import Callable
-from typing import Protocol, runtime_checkable
+from collections.abc import Callable, Mapping
+from typing import Any, Protocol, runtime_checkable
 
 from controllers.base import Controller, PlanningDriver, RaceContext, Tracker
 from controllers.plan import Plan
+from controllers.registry import ControllerSpec
+from server.controller_params import build_controller, resolve_factory
 from server.host_messages import ActionOut, Error, Failed, FromHost, Ready
 from server.loop import step_below_realtime
 from server.race_config import KartEntry
@@ -170,6 +172,23 @@ class KartDriver:
         if self.last_error is None:
             log.warning("kart %d (%s): %s", self.index, self.controller_name, what, exc_info=traceback)
         self.last_error = what
+
+
+def make_driver(entry: KartEntry, token: str | None, catalogue: Mapping[str, ControllerSpec[Any]]) -> KartDriver:
+    """Kart ``entry``'s driver: a human's (``token``: its drive token), or its controller from ``catalogue`` built
+    here with the entry's parameters. A controller whose construction raises leaves the kart's driver disabled,
+    with the error recorded (the race goes on; the kart brakes)."""
+    if entry.human:
+        return KartDriver(entry, None, token)
+    try:
+        controller = build_controller(resolve_factory(catalogue[entry.controller], entry.params))
+    except Exception as exc:
+        driver = KartDriver(entry, None)
+        driver.exceptions += 1
+        driver.disabled = True
+        driver.record_error(f"construction raised {type(exc).__name__}: {exc}")
+        return driver
+    return KartDriver(entry, controller)
 
 
 class KartWorker(Protocol):

@@ -11,8 +11,8 @@ then stored; the race stays live for a while so viewers see the end.
 Each tick (see :mod:`server.ticks` for the schedule) does only bounded work on the event loop: deliver plans
 that came back from the planner workers (:mod:`server.plan_requests`), read the newest controller inputs (never
 waiting for them), step the world, hand the new observations to the karts' controller workers
-(:mod:`server.hosts` processes, or threads: :mod:`server.drivers`), request due plans, build the frame
-(:mod:`server.frames`) and push it to the scene and the subscribers.
+(:mod:`server.kart_workers`), request due plans, build the frame (:mod:`server.frames`) and push it to the scene
+and the subscribers.
 """
 
 from __future__ import annotations
@@ -29,14 +29,16 @@ import numpy as np
 from controllers.base import RaceContext
 from controllers.plan import Plan
 from controllers.replay import ReplayRecorder, apply_plan_targets
+from server.absent_drivers import DriverWait, StuckWatch, not_ready
 from server.broadcast import Broadcast
-from server.controller_params import build_controller, resolve_factory
+from server.controller_params import resolve_factory
 from server.db import utc_now
-from server.drivers import DriverThread, KartDriver, KartWorker
+from server.drivers import KartDriver, make_driver
 from server.frames import TelemetryMessage, build_frame, replay_json
 from server.host_messages import PlannerSetup
+from server.kart_workers import KartWorkers
 from server.plan_requests import PlanRequests
-from server.race_config import KartEntry, RaceConfig
+from server.race_config import RaceConfig
 from server.results import RaceRecord, RaceSetup, live_race_manifest, race_record
 from server.services import RaceServices, Scene
 from server.snapshot import DriverState, RaceSnapshot, Standing
@@ -65,7 +67,7 @@ class RaceSession:
         self.settings = services.settings
         self.created_at: datetime = utc_now()
         self.status = RaceStatus.STARTING
-        self.drivers = [self._make_driver(entry, tokens.get(entry.index)) for entry in config.karts]
+        self.drivers = [make_driver(entry, tokens.get(entry.index), services.catalogue) for entry in config.karts]
         self.world: World | None = None
         self.frame: RaceFrame | None = None
         self.updates = Broadcast()
@@ -77,8 +79,8 @@ class RaceSession:
         self.plans_version = 0
         self.error: str | None = None
         self.end_reason: str | None = None  # why the race ended (stored with the result)
-        self._stuck_since: float | None = None  # [s] monotonic: since when no unfinished kart could move
-        self._workers: dict[int, KartWorker] = {}  # AI kart -> where its controller runs
+        self._stuck = StuckWatch(self.settings)
+        self._workers = KartWorkers(race_id, self.drivers, services.hosts, self.settings)  # the AI controllers
         self._plans = PlanRequests(race_id, services.planners, self.settings.plan_timeout_s)
         self._actions = np.zeros((1, len(self.drivers), 2))
         self._telemetry = TelemetryMessage()
@@ -90,19 +92,6 @@ class RaceSession:
         self.task: asyncio.Task[None] | None = None
         self.on_closed: Callable[[RaceSession], None] | None = None
         self.other_starts: Callable[[], list[float]] = list  # schedule starts of the other running races
-
-    def _make_driver(self, entry: KartEntry, token: str | None) -> KartDriver:
-        if entry.human:
-            return KartDriver(entry, None, token)
-        try:
-            controller = build_controller(resolve_factory(self.services.catalogue[entry.controller], entry.params))
-        except Exception as exc:
-            driver = KartDriver(entry, None)
-            driver.exceptions += 1
-            driver.disabled = True
-            driver.record_error(f"construction raised {type(exc).__name__}: {exc}")
-            return driver
-        return KartDriver(entry, controller)
 
     # ------------------------------------------------------------------ control
     def start(self) -> None:
@@ -145,7 +134,7 @@ class RaceSession:
         """The human drivers the race still waits for (not connected yet, or their view not ready)."""
         if self.status not in (RaceStatus.STARTING, RaceStatus.WAITING):
             return []
-        return [d for d in self.drivers if d.human and not (d.ever_connected and d.view_ready)]
+        return not_ready(self.drivers)
 
     # ------------------------------------------------------------------ views
     def telemetry_message(self) -> str | None:
@@ -231,20 +220,16 @@ class RaceSession:
             if not d.human
         }
         ai = [d for d in self.drivers if not d.human and not d.disabled]
-        hosts = self.services.hosts
         opening = []
         for d in ai:
             factory = resolve_factory(self.services.catalogue[d.controller_name], d.entry.params)
-            if hosts is not None:
-                self._workers[d.index] = hosts.attach(d, factory, contexts[d.index])
-            else:
-                self._workers[d.index] = DriverThread(d, contexts[d.index], f"race-{self.id}-kart{d.index}")
+            self._workers.attach(d, factory, contexts[d.index])
             if d.planning is not None:
                 setup = PlannerSetup(factory, contexts[d.index], self.settings.plan_budget_s)
                 opening.append(self._plans.open(d, setup, self.settings.controller_reset_s))
         await asyncio.gather(self._open_scene(), *opening)
-        while any(w.resetting for w in self._workers.values()) and self._stop_status is None:
-            self._check_hang()
+        while self._workers.resetting and self._stop_status is None:
+            self._workers.check_hang()
             await asyncio.sleep(HANG_POLL_S)
         self._publish()
 
@@ -266,31 +251,18 @@ class RaceSession:
             log.exception("race %s: the 3D view could not start; racing without it", self.id)
 
     async def _wait_for_humans(self) -> None:
-        """Wait until every human driver has connected and its view is ready: at most ``human_wait_s`` for the
-        connections (a driver who never comes cancels the race), then at most ``view_ready_wait_s`` for the views
-        (then the race starts anyway)."""
+        """Wait until every human driver has connected and its view is ready, or cancel the race
+        (:class:`~server.absent_drivers.DriverWait`)."""
         await self._set_status(RaceStatus.WAITING)
-        now = time.monotonic()
-        joined_by = now + self.settings.human_wait_s
-        ready_by: float | None = None
-        while self.waiting_for():
-            now = time.monotonic()
-            humans = [d for d in self.drivers if d.human]
-            if ready_by is None and all(d.ever_connected for d in humans):
-                ready_by = now + self.settings.view_ready_wait_s
-            if ready_by is None and now >= joined_by:
-                # a driver who never came: the race is called off (it would run with a parked kart)
-                absent = ", ".join(str(d.index) for d in humans if not d.ever_connected)
-                wait_s, setting = self.settings.human_wait_s, self.settings.env_name("human_wait_s")
-                self.stop(RaceStatus.CANCELLED, f"no driver joined kart(s) {absent} within {wait_s:g} s ({setting})")
-                return
-            if ready_by is not None and now >= ready_by:
-                late = ", ".join(d.name for d in self.waiting_for())
-                log.info("race %s: starting without waiting longer for %s", self.id, late)
-                return
+        wait = DriverWait(self.drivers, self.settings, time.monotonic())
+        while (over := wait.over(time.monotonic())) is None:
             self._publish()  # the drive pages show whom the race waits for
             if await self._stopped_within(GRID_PUBLISH_S):
                 return
+        if over.cancel is not None:
+            self.stop(RaceStatus.CANCELLED, over.cancel)
+        elif over.late:
+            log.info("race %s: starting without waiting longer for %s", self.id, ", ".join(over.late))
 
     async def _count_down(self) -> None:
         """``countdown_s`` of wall time before the start, published in the frames; nothing moves meanwhile."""
@@ -333,27 +305,19 @@ class RaceSession:
             self._end_if_stuck()
 
     def _end_if_stuck(self) -> None:
-        """End the race (``finished``, the rest not finished) once no unfinished kart could move for
-        ``abandoned_race_s``: each an absent or silent human, or an AI whose controller is disabled."""
+        """End the race (``finished``, the rest not finished) once no unfinished kart could move for a while
+        (:class:`~server.absent_drivers.StuckWatch`)."""
         assert self.world is not None
         finished = self.world.istate[0, :, st.I_FINISHED]
-        stuck = [d for d in self.drivers if not finished[d.index]]
-        if not all((d.braking and (d.human or d.disabled)) for d in stuck):
-            self._stuck_since = None
-            return
-        now = time.monotonic()
-        if self._stuck_since is None:
-            self._stuck_since = now
-        elif now - self._stuck_since >= self.settings.abandoned_race_s:
-            karts = ", ".join(str(d.index) for d in stuck)
-            why = f"no unfinished kart could move for {self.settings.abandoned_race_s:g} s: kart(s) {karts} "
-            self.stop(RaceStatus.FINISHED, why + "absent, silent or disabled (not finished)")
+        why = self._stuck.check([d for d in self.drivers if not finished[d.index]], time.monotonic())
+        if why is not None:
+            self.stop(RaceStatus.FINISHED, why)
 
     # ------------------------------------------------------------------ one tick
     def _tick(self) -> None:
         world = self.world
         assert world is not None
-        self._check_hang()
+        self._workers.check_hang()
         for d, plan in self._plans.collect(self.drivers):
             self._deliver(d, plan)
         step = int(world.steps[0])
@@ -364,9 +328,7 @@ class RaceSession:
             if d.human:
                 d.take_human_input(now, float(speeds[d.index]), settings.drive_timeout_s)
             else:
-                worker = self._workers.get(d.index)
-                latest = worker.latest if worker is not None else None
-                d.take_ai_input(latest, step, float(speeds[d.index]), settings.controller_hold_s)
+                d.take_ai_input(self._workers.latest(d.index), step, float(speeds[d.index]), settings.controller_hold_s)
             self._actions[0, d.index] = (d.steer, d.throttle)
         world.step(self._actions)
         self.laps.observe(world)
@@ -382,36 +344,12 @@ class RaceSession:
 
     def _submit(self, observations: Sequence[Observation]) -> None:
         assert self.world is not None
-        step = int(self.world.steps[0])
-        for k, worker in self._workers.items():
-            d = self.drivers[k]
-            if d.ready and not d.disabled and step % d.every == 0 and not observations[k].me.finished:
-                d.submitted_step = step
-                worker.submit(step, observations[k])
-
-    def _check_hang(self) -> None:
-        if self.services.hosts is not None:
-            self.services.hosts.revive()
-        now = time.monotonic()
-        for k, worker in list(self._workers.items()):
-            since = worker.busy_since
-            limit = self.settings.controller_reset_s if worker.resetting else self.settings.controller_hang_s
-            if since is None or now - since <= limit:
-                continue
-            d = self.drivers[k]
-            d.hangs += 1
-            d.disabled = True
-            d.last_error = f"{'reset' if worker.resetting else 'act'} did not return within {limit:g} s"
-            log.warning("race %s kart %d (%s): %s; the kart brakes", self.id, k, d.controller_name, d.last_error)
-            worker.retire()
-            del self._workers[k]
+        self._workers.submit(int(self.world.steps[0]), observations)
 
     def _deliver(self, d: KartDriver, plan: Plan) -> None:
         assert d.planning is not None and self.world is not None
         d.planning.deliver(plan)
-        worker = self._workers.get(d.index)
-        if worker is not None:
-            worker.deliver(plan)
+        self._workers.deliver(d.index, plan)
         apply_plan_targets(self.world, 0, d.index, plan)  # the referee's delta_r / delta_v, as headless races
         d.waypoints = tuple(w.position for w in plan.ego_waypoints)
         d.predicted = tuple(w.position for ws in plan.opponent_waypoints().values() for w in ws)
@@ -489,9 +427,7 @@ class RaceSession:
         self.services.db.finish(self.id, record, tick_stats, self.replay_json())
 
     def _release(self) -> None:
-        for worker in self._workers.values():
-            worker.retire()
-        self._workers.clear()
+        self._workers.retire_all()
         self._plans.close()
 
     async def _close_scene(self) -> None:
