@@ -1,5 +1,5 @@
-"""The replay player's clock and panel (web.replay_scene.ReplayScene) on a real viser server, with a stand-in
-recording: play and pause, seeking (clamped), the speed choice, the frame shown, and closing."""
+"""The replay player (web.replay_scene.ReplayScene) on a real viser server, with a stand-in recording: a
+viewer's playback clock (play and pause, seeking (clamped), the speed), and closing."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 
 from sim_core.track_io import get_track
 from web.frame import KartFrame, RaceFrame
-from web.replay_scene import PAUSE, PLAY, ReplayScene
+from web.replay_scene import Playback, ReplayScene
 
 STEPS = 500  # 10 s at 0.02 s
 
@@ -44,30 +44,32 @@ def player() -> Iterator[tuple[ReplayScene, StraightLine]]:
 
 def test_it_starts_paused_at_the_grid_and_seeks_within_the_race(player: tuple[ReplayScene, StraightLine]) -> None:
     scene, frames = player
-    assert not scene.playing and scene.time == 0.0 and scene.duration == pytest.approx(10.0)
-    assert frames.asked[0] == 0  # the grid is shown at once
-    scene.seek(4.0)
-    assert scene.time == 4.0
-    scene.seek(-3.0)
-    assert scene.time == 0.0
-    scene.seek(99.0)
-    assert scene.time == pytest.approx(10.0)
+    playback = Playback(scene.duration)  # each viewer's own (viewers: tests/web/test_replay_viewers.py)
+    assert not playback.playing and playback.time == 0.0 and scene.duration == pytest.approx(10.0)
+    assert frames.asked == []  # nothing is shown before a viewer comes
+    playback.seek(4.0)
+    assert playback.time == 4.0
+    playback.seek(-3.0)
+    assert playback.time == 0.0
+    playback.seek(99.0)
+    assert playback.time == pytest.approx(10.0)
 
 
 def test_play_pause_and_the_speed_choice(player: tuple[ReplayScene, StraightLine]) -> None:
     scene, _ = player
-    scene.play()
-    assert scene.playing and scene._play_button.label == PAUSE
-    scene.pause()
-    assert not scene.playing and scene._play_button.label == PLAY
-    scene._speed_choice.value = "8x"  # as a viewer's choice arrives
-    assert scene._speed == 8.0
-    scene._speed_choice.value = "0.25x"
-    assert scene._speed == 0.25
+    playback = Playback(scene.duration)  # (a viewer's panel sets it: tests/web/test_replay_viewers.py)
+    playback.play()
+    assert playback.playing
+    playback.pause()
+    assert not playback.playing
+    playback.set_speed(8.0)
+    assert playback.speed == 8.0
+    playback.set_speed(0.25)
+    assert playback.speed == 0.25
     # playing from the end starts over
-    scene.seek(99.0)
-    scene.play()
-    assert scene.time == 0.0 and scene.playing
+    playback.seek(99.0)
+    playback.play()
+    assert playback.time == 0.0 and playback.playing
 
 
 def test_closing_stops_the_clock_and_the_server(player: tuple[ReplayScene, StraightLine]) -> None:
