@@ -26,8 +26,9 @@ compose:  ## Debian's docker-compose for the deployment test (`docker-compose co
 run: setup  ## set up, then start the race server on embedded defaults (SQLite file, local workers)
 	$(BIN)/karting serve
 
+# -n auto: one worker per core; --dist loadscope keeps a module's tests (and its module-scoped server) on one worker
 test: lint browser compose  ## set up, then lint, type-check and run every test
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --dist loadscope
 
 lint: setup  ## ruff (rules, complexity limits), ruff format --check, mypy on every package ([tool.mypy] files)
 	$(BIN)/ruff check .
