@@ -1,11 +1,13 @@
 """Feedback LQ Nash solve time: the tracker-sized game (4 states and 2 controls per player, horizon 4).
 
 Median over many solves with the tracker's real cost structure for 2 and 4 players. Run from the repo
-root: ``.venv/bin/python benchmarks/lqng.py``; the last line is one JSON object (`solve_ms_2p`, `solve_ms_4p`).
+root: ``.venv/bin/python benchmarks/lqng.py`` (``--repeats N``: solves timed per size); the last line is one JSON
+object (`solve_ms_2p`, `solve_ms_4p`).
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import statistics
 import time
@@ -38,12 +40,13 @@ def tracker_game(
     return A, B, Q, q, R
 
 
-def median_ms(players: int) -> float:
+def median_ms(players: int, repeats: int = REPEATS) -> float:
+    """Median milliseconds of one solve of a ``players``-player game, over ``repeats`` solves."""
     rng = np.random.default_rng(players)
     game = tracker_game(players, rng)
     feedback_nash(*game, horizon=4)  # compile
     times = []
-    for _ in range(REPEATS):
+    for _ in range(repeats):
         t0 = time.perf_counter()
         feedback_nash(*game, horizon=4)
         times.append((time.perf_counter() - t0) * 1000)
@@ -51,8 +54,12 @@ def median_ms(players: int) -> float:
 
 
 def main() -> None:
-    two, four = median_ms(2), median_ms(4)
-    print(f"2 players: {two:.4f} ms; 4 players: {four:.4f} ms (median of {REPEATS}, horizon 4)")
+    """Time both game sizes; print a line, then the JSON summary."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=REPEATS, help="solves timed per game size")
+    repeats = parser.parse_args().repeats
+    two, four = median_ms(2, repeats), median_ms(4, repeats)
+    print(f"2 players: {two:.4f} ms; 4 players: {four:.4f} ms (median of {repeats}, horizon 4)")
     print(json.dumps({"solve_ms_2p": round(two, 4), "solve_ms_4p": round(four, 4), "target_solve_ms_2p": 0.2}))
 
 

@@ -1,11 +1,13 @@
 """Racing-line optimisation time per track and the optimised line's lap time against the hand-set lanes.
 
 Both lines are timed under the same speed-profile model (paper kart, tyre wear 0.25).
-Run from the repo root: ``.venv/bin/python benchmarks/racing_line.py``; the last line is one JSON object.
+Run from the repo root: ``.venv/bin/python benchmarks/racing_line.py`` (``--help``: repeats and tracks); the last
+line is one JSON object.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import time
 
@@ -17,13 +19,18 @@ REPEATS = 5
 
 
 def main() -> None:
+    """Time each track's optimisation; print a line per track, then the JSON summary."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=REPEATS, help="optimisations timed per track (best kept)")
+    parser.add_argument("--tracks", default="oval,complex", help="tracks, comma separated")
+    args = parser.parse_args()
     seconds: dict[str, float] = {}
     ratios: dict[str, float] = {}
-    for name in ("oval", "complex"):
+    for name in args.tracks.split(","):
         track = get_track(name)
         compute_racing_line(track, PAPER_KART)  # warm imports (the optimisation itself is never cached here)
         times = []
-        for _ in range(REPEATS):
+        for _ in range(args.repeats):
             t0 = time.perf_counter()
             line = compute_racing_line(track, PAPER_KART)
             times.append(time.perf_counter() - t0)
@@ -31,7 +38,7 @@ def main() -> None:
         seconds[name] = min(times)
         ratios[name] = line.lap_time / handset.lap_time
         print(
-            f"{name}: {min(times) * 1000:.0f} ms (best of {REPEATS}); lap {line.lap_time:.2f} s optimised vs "
+            f"{name}: {min(times) * 1000:.0f} ms (best of {args.repeats}); lap {line.lap_time:.2f} s optimised vs "
             f"{handset.lap_time:.2f} s hand-set; lanes {''.join(map(str, line.checkpoint_lanes))}"
         )
     print(

@@ -8,11 +8,12 @@ search plans alone and with the check of depth 1, 2 and 3 (every legal lane sequ
 milliseconds per rollout; and, for the depth-3 check's candidates, the seconds to score them as a tree (shared
 beginnings raced once, the check's way) next to racing each alone, with the steps each took. Timings depend on
 the machine and on what else runs. Run from the repo root:
-``.venv/bin/python benchmarks/rollout_check.py``. The last line is one JSON object.
+``.venv/bin/python benchmarks/rollout_check.py`` (``--help``: rounds and depths). The last line is one JSON object.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import statistics
 import time
@@ -43,8 +44,8 @@ def first_corner() -> tuple[Observation, RaceContext]:
     return observe(world, 0)[0], context
 
 
-def tree_against_alone(planner: object, observation: Observation) -> dict[str, float]:
-    """Seconds (median of ``ROUNDS``, alternating) and steps to score the check's candidates at ``observation``
+def tree_against_alone(planner: object, observation: Observation, rounds: int = ROUNDS) -> dict[str, float]:
+    """Seconds (median of ``rounds``, alternating) and steps to score the check's candidates at ``observation``
     as a tree and one by one; the scores must agree."""
     assert isinstance(planner, CheckedPlanner)
     check, inner = planner.check, planner.inner
@@ -55,7 +56,7 @@ def tree_against_alone(planner: object, observation: Observation) -> dict[str, f
     candidates = check.candidates(plan, observation.me, inner.line_lanes, inner.lane_limit)
     times: dict[str, list[float]] = {"tree": [], "alone": []}
     steps: dict[str, int] = {}
-    for _ in range(ROUNDS):
+    for _ in range(rounds):
         before, t0 = check.counts.steps, time.perf_counter()
         tree = check.scores(observation, rival, plan, target, candidates)
         times["tree"].append(time.perf_counter() - t0)
@@ -78,9 +79,21 @@ def tree_against_alone(planner: object, observation: Observation) -> dict[str, f
 
 
 def main() -> None:
+    """Plan alone and with each depth's check, then score the deepest check's candidates both ways; print a line
+    each, then the JSON summary."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--rounds", type=int, default=ROUNDS, help="plans timed per depth (median kept)")
+    parser.add_argument(
+        "--depths",
+        type=lambda s: tuple(int(x) for x in s.split(",")),
+        default=DEPTHS,
+        help="check depths, comma separated",
+    )
+    args = parser.parse_args()
+    depths: tuple[int, ...] = args.depths
     observation, context = first_corner()
     planners = {}
-    for depth in (0, *DEPTHS):
+    for depth in (0, *depths):
         # the gate off: from one observation nothing is ever measured, and a gated check would race no rollout
         driver = make_controller("mcts-lqng")
         assert isinstance(driver, HierarchicalController)
@@ -92,7 +105,7 @@ def main() -> None:
         planners[depth] = driver.planner
     seconds: dict[int, list[float]] = {depth: [] for depth in planners}
     rollouts: dict[int, int] = {}
-    for _ in range(ROUNDS):
+    for _ in range(args.rounds):
         for depth, planner in planners.items():
             before = planner.check.counts.rollouts if isinstance(planner, CheckedPlanner) else 0
             t0 = time.perf_counter()
@@ -101,19 +114,19 @@ def main() -> None:
             if isinstance(planner, CheckedPlanner):
                 rollouts[depth] = planner.check.counts.rollouts - before
     median = {depth: statistics.median(times) for depth, times in seconds.items()}
-    tree = tree_against_alone(planners[DEPTHS[-1]], observation)
+    tree = tree_against_alone(planners[depths[-1]], observation, args.rounds)
     for depth, value in median.items():
         label = "search alone" if depth == 0 else f"check depth {depth} ({rollouts[depth]} rollouts)"
         print(f"{label}: {value * 1000:.1f} ms per plan")
     per_rollout = {
-        depth: (median[depth] - median[0]) / rollouts[depth] * 1000 for depth in DEPTHS if rollouts.get(depth)
+        depth: (median[depth] - median[0]) / rollouts[depth] * 1000 for depth in depths if rollouts.get(depth)
     }
     print(
         json.dumps(
             {
                 "search_plan_ms": round(median[0] * 1000, 2),
-                "checked_plan_ms": {str(d): round(median[d] * 1000, 1) for d in DEPTHS},
-                "rollouts_per_check": {str(d): rollouts.get(d, 0) for d in DEPTHS},
+                "checked_plan_ms": {str(d): round(median[d] * 1000, 1) for d in depths},
+                "rollouts_per_check": {str(d): rollouts.get(d, 0) for d in depths},
                 "ms_per_rollout": {str(d): round(v, 2) for d, v in per_rollout.items()},
                 **tree,
             }

@@ -11,8 +11,8 @@ measures over a window of ticks:
 and finally, with one human race, how many ticks after sending an input on the drive websocket the state
 message reflecting it arrives (``drive_reflect_ticks``, median; the input is applied at the next tick).
 
-Run from the repo root: ``.venv/bin/python benchmarks/serve_loop.py`` (about a minute and a half). The last
-line printed is one JSON object.
+Run from the repo root: ``.venv/bin/python benchmarks/serve_loop.py`` (about a minute and a half; ``--help``: the
+load levels, windows and inputs). The last line printed is one JSON object.
 """
 
 from __future__ import annotations
@@ -36,6 +36,8 @@ import numpy as np
 import viser
 from websockets.asyncio.client import ClientConnection, connect
 
+from server.status import LIVE_STATUSES, RaceStatus
+
 ROOT = Path(__file__).resolve().parents[1]
 RACE = {"track": "oval", "laps": 4, "karts": [{"controller": "mcts-lqng"}, {"controller": "fixed-lqng"}]}
 HUMAN_RACE = {"track": "oval", "laps": 4, "karts": [{"controller": "human"}, {"controller": "lane-follower"}]}
@@ -56,9 +58,10 @@ async def read_forever(ws: ClientConnection) -> None:
 
 
 async def wait_running(client: httpx.AsyncClient, race_id: str) -> None:
-    """Wait until the race runs (raises if it ended instead)."""
-    while (status := (await client.get(f"/api/races/{race_id}")).json()["status"]) != "running":
-        if status not in ("starting", "waiting"):
+    """Wait until the race runs, through whatever comes before (a race with a human kart waits for its driver and
+    counts down); raises if it ended instead."""
+    while (status := (await client.get(f"/api/races/{race_id}")).json()["status"]) != RaceStatus.RUNNING:
+        if status not in LIVE_STATUSES:
             raise RuntimeError(f"race {race_id} is {status}, not running")
         await asyncio.sleep(0.1)
 

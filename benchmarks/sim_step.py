@@ -3,12 +3,13 @@
 Measures (1) steps/s of one 2-kart race stepped one step per call, as the live server and a headless race
 do, and (2) kart-steps/s of B = 1024 two-kart races stepped together, as training does. Both use the
 ``complex`` track (the more expensive one) with karts driving a lane at race speed, so walls, rays and
-checkpoints are exercised. Run from the repo root: ``.venv/bin/python benchmarks/sim_step.py``.
-The last line printed is one JSON object.
+checkpoints are exercised. Run from the repo root: ``.venv/bin/python benchmarks/sim_step.py`` (``--help``: the
+sizes; the smoke test runs it tiny). The last line printed is one JSON object.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import time
 
@@ -30,7 +31,7 @@ def driving_actions(world: World, follower: LaneFollower) -> np.ndarray:
     return follower.act_on(world, lateral)
 
 
-def bench_single(track_name: str) -> float:
+def bench_single(track_name: str, n_steps: int = SINGLE_STEPS) -> float:
     track = get_track(track_name)
     world = World(track, 1, 2)
     follower = LaneFollower(track, world.params.kart)
@@ -38,7 +39,7 @@ def bench_single(track_name: str) -> float:
     world.reset()
     steps = 0
     elapsed = 0.0
-    while steps < SINGLE_STEPS:
+    while steps < n_steps:
         actions = driving_actions(world, follower)  # a new decision every 10 steps, not timed
         t0 = time.perf_counter()
         for _ in range(10):
@@ -50,31 +51,37 @@ def bench_single(track_name: str) -> float:
     return steps / elapsed
 
 
-def bench_batched(track_name: str) -> float:
+def bench_batched(track_name: str, batch: int = BATCH, n_steps: int = BATCH_STEPS) -> float:
     track = get_track(track_name)
-    world = World(track, BATCH, 2)
+    world = World(track, batch, 2)
     follower = LaneFollower(track, world.params.kart)
     # spread the races around the lap so the batch sees straights and curves alike
     rng = np.random.default_rng(0)
-    for b in range(BATCH):
+    for b in range(batch):
         s = rng.uniform(0, track.length)
         world.place_kart(b, 0, s, 1.25, speed=8.0)
         world.place_kart(b, 1, s - 6.0, -1.25, speed=8.0)
-    world.step(np.zeros((BATCH, 2, 2)))  # compile
+    world.step(np.zeros((batch, 2, 2)))  # compile
     elapsed = 0.0
-    for _ in range(BATCH_STEPS // 10):
+    for _ in range(max(1, n_steps // 10)):
         actions = driving_actions(world, follower)
         t0 = time.perf_counter()
         world.step(actions, n_steps=10)
         elapsed += time.perf_counter() - t0
-    return BATCH * 2 * BATCH_STEPS / elapsed
+    return batch * 2 * max(1, n_steps // 10) * 10 / elapsed
 
 
 def main() -> None:
-    single = bench_single(TRACK)
-    batched = bench_batched(TRACK)
+    """Time both ways of stepping; print a line each, then the JSON summary."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--single-steps", type=int, default=SINGLE_STEPS, help="steps of the single race timed")
+    parser.add_argument("--batch", type=int, default=BATCH, help="races stepped together")
+    parser.add_argument("--batch-steps", type=int, default=BATCH_STEPS, help="steps of the batch timed")
+    args = parser.parse_args()
+    single = bench_single(TRACK, args.single_steps)
+    batched = bench_batched(TRACK, args.batch, args.batch_steps)
     print(f"single 2-kart race on {TRACK}: {single:,.0f} steps/s ({single * 0.02:,.0f}x real time)")
-    print(f"batched {BATCH} x 2 karts on {TRACK}: {batched:,.0f} kart-steps/s")
+    print(f"batched {args.batch} x 2 karts on {TRACK}: {batched:,.0f} kart-steps/s")
     print(
         json.dumps(
             {
@@ -82,7 +89,7 @@ def main() -> None:
                 "single_race_steps_per_s": round(single),
                 "single_race_realtime_factor": round(single * 0.02, 1),
                 "batched_kart_steps_per_s": round(batched),
-                "batch_size": BATCH,
+                "batch_size": args.batch,
                 "targets": {"single_race_steps_per_s": 20000, "batched_kart_steps_per_s": 1000000},
             }
         )

@@ -41,12 +41,14 @@ import psutil
 from websockets.asyncio.client import connect
 from websockets.exceptions import ConnectionClosed
 
+from server.status import LIVE_STATUSES
+
 ROOT = Path(__file__).resolve().parents[1]
 LOOPBACK = "127.0.0.1"
 AI_RACE = {"track": "oval", "laps": 20, "karts": [{"controller": "fixed-lqng"}, {"controller": "lane-follower"}]}
 HUMAN_RACE = {"track": "oval", "laps": 20, "karts": [{"controller": "human"}, {"controller": "lane-follower"}]}
 LATE_MS = 5.0  # [ms] a tick starting later than this counts as late
-LIVE = ("starting", "waiting", "running")
+LIVE = LIVE_STATUSES  # a race with a human kart waits for its driver and counts down before it runs
 NORMAL_ENDS = ("finished", "stopped")
 
 

@@ -8,8 +8,9 @@ projected from it.
 * ``full_grid_minutes``: each pairing and track's mean race wall time (drivers built, race run, replay kept) x 50,
   summed and divided among the workers: the grid's wall time on this machine when the workers stay busy.
 
-Run from the repo root: ``.venv/bin/python benchmarks/tournament.py`` (about 2-3 minutes on 2 cores). The last
-line printed is one JSON object.
+Run from the repo root: ``.venv/bin/python benchmarks/tournament.py`` (about 2-3 minutes on 2 cores; ``--help``: the
+sample, and ``--laps`` / ``--time-limit`` for short races, which the projection then assumes too). The last line
+printed is one JSON object.
 """
 
 from __future__ import annotations
@@ -36,10 +37,14 @@ def main(
     races: int = typer.Option(1, min=1, help="races per pairing and track in the sample"),
     workers: int = typer.Option(0, min=0, help="worker processes (0: one per CPU)"),
     seed: int = typer.Option(0),
+    laps: int | None = typer.Option(None, min=1, help="laps per race (default: each track's)"),
+    time_limit: float | None = typer.Option(None, min=1.0, help="[s] per race (default: the rules' limit)"),
 ) -> None:
     """Run the sample, print a line per pairing and track, then the JSON summary."""
     n_workers = workers or default_workers()
-    spec = TournamentSpec(tuple(agents.split(",")), tuple(tracks.split(",")), races, seed).validate()
+    spec = TournamentSpec(
+        tuple(agents.split(",")), tuple(tracks.split(",")), races, seed, laps=laps, time_limit=time_limit
+    ).validate()
     store = MemoryStore()
     started = time.perf_counter()
     run_tournament(spec, store, "bench", backend="process", workers=n_workers)

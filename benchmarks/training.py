@@ -2,7 +2,9 @@
 
 Runs a short training of MCTS-RL (warm-up excluded: the first update pays for compiling the kernels) and prints
 one JSON object last, with ``env_steps_per_s`` (learner decisions per second of wall time, the count that
-Stable-Baselines3's ``total_timesteps`` and the paper's 8M steps use).
+Stable-Baselines3's ``total_timesteps`` and the paper's 8M steps use). Run from the repo root:
+``.venv/bin/python benchmarks/training.py`` (``--help``: the steps, races and rollout buffer; the smoke test runs
+it tiny).
 """
 
 from __future__ import annotations
@@ -24,12 +26,17 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=153_600)
     parser.add_argument("--races", type=int, default=128)
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--warm-steps", type=int, default=10_240, help="the untimed first run's steps")
+    parser.add_argument("--buffer", type=int, default=PPOConfig.buffer_size, help="steps per rollout, all races")
+    parser.add_argument("--batch", type=int, default=PPOConfig.batch_size, help="samples per gradient step")
     args = parser.parse_args()
     env = make_config("mcts-rl")
+    sizes = {"n_races": args.races, "torch_threads": args.threads, "buffer_size": args.buffer}
+    sizes |= {"batch_size": args.batch}
     with tempfile.TemporaryDirectory() as tmp:
-        warm = PPOConfig(total_steps=10_240, n_races=args.races, torch_threads=args.threads)
+        warm = PPOConfig(total_steps=args.warm_steps, **sizes)
         train(env, warm, Path(tmp) / "warm")
-        ppo = PPOConfig(total_steps=args.steps, n_races=args.races, torch_threads=args.threads)
+        ppo = PPOConfig(total_steps=args.steps, **sizes)
         start = time.perf_counter()
         result = train(env, ppo, Path(tmp) / "run")
         total = time.perf_counter() - start
