@@ -4,6 +4,7 @@ finish)."""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterator
 
 import httpx
@@ -19,7 +20,7 @@ HUMAN = {"controller": "human", "name": "Ada"}
 @pytest.fixture(scope="module")
 def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
     db = tmp_path_factory.mktemp("ends") / "karting.db"
-    settings = server_settings(db, speedup=10.0, human_wait_s=JOIN_S, abandoned_race_s=STUCK_S)
+    settings = server_settings(db, speedup=30.0, human_wait_s=JOIN_S, abandoned_race_s=STUCK_S, countdown_s=0.0)
     with LiveServer(settings) as server:
         yield server
 
@@ -49,7 +50,9 @@ def test_a_race_ends_when_only_absent_humans_are_left(live: LiveServer, client: 
     url = f"{live.ws_url}/api/races/{race['id']}/drive?kart=0&token={race['drive_tokens']['0']}"
     with connect(url, open_timeout=10) as ws:
         ws.recv(timeout=10)  # the race starts with its driver here...
-        if driver == "silent":  # ...who then sends nothing while the lane follower finishes
+        if driver == "silent":  # ...who then sends nothing (the page reads on) while the lane follower finishes
+            while json.loads(ws.recv(timeout=120))["type"] != "end":
+                pass
             ended = wait_status(client, race["id"], ("finished", "stopped", "aborted"), 120)
     if driver == "gone":  # ...or leaves at once
         ended = wait_status(client, race["id"], ("finished", "stopped", "aborted"), 120)
