@@ -266,7 +266,7 @@ def test_the_race_waits_for_the_view_then_counts_down_with_nothing_moving(
         assert driver.states[-1]["waiting_for"] == []
         driver.until(lambda: driver.states[-1]["status"] == "running", COUNTDOWN_S + 5)
         driver.drive(0.0, 1.0, 1.0)
-        frames = []
+        frames: list[dict[str, Any]] = []
         while len(frames) < 200 and (not frames or frames[-1]["status"] != "running" or frames[-1]["step"] < 20):
             frames.append(json.loads(telemetry.recv(timeout=5)))
     counting = [s for s in driver.states if s["status"] == "countdown"]
