@@ -1,5 +1,6 @@
 """Shared test configuration: deterministic hypothesis runs (no deadline: the first call of a compiled kernel
-includes its compilation), and, for a parallel run (``-n``), numba's cache filled once before the workers start."""
+includes its compilation); tests marked ``slow`` first; and, for a parallel run (``-n``), numba's cache filled once
+before the workers start."""
 
 from __future__ import annotations
 
@@ -23,3 +24,9 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     seconds = warm()
     if seconds is not None:
         print(f"\nnumba kernels compiled into the cache in {seconds:.0f} s", file=sys.stderr)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Tests marked ``slow`` first (the order is otherwise kept): a parallel run hands out whole modules in this
+    order, so the longest ones start at once instead of leaving one worker busy at the end while the other idles."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)

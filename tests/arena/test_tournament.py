@@ -123,6 +123,7 @@ def test_every_race_is_stored_in_the_servers_database_with_its_result_and_replay
         store.create("no spaces", SMALL)
 
 
+@pytest.mark.slow  # starts a local Ray
 def test_the_ray_backend_runs_the_reduced_grid_on_a_local_ray() -> None:
     ray = pytest.importorskip("ray", reason="the ray backend needs the tournament extra (ray)")
     inline, on_ray = MemoryStore(), MemoryStore()
@@ -167,6 +168,7 @@ def _run_cli(db: Path, tournament_id: str, races: int) -> subprocess.Popen[bytes
     )
 
 
+@pytest.mark.slow  # three runs of the command line, one killed
 def test_a_tournament_killed_part_way_resumes_to_the_results_of_one_run_straight_through(tmp_path: Path) -> None:
     races = 8
     straight = _run_cli(tmp_path / "straight.db", "grid", races)

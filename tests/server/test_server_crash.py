@@ -15,6 +15,8 @@ from support.live_server import wait_for, wait_status
 from support.processes import descendants, describe, survivors_after
 from support.server_process import ServerProcess
 
+pytestmark = pytest.mark.slow  # two real servers and their process trees
+
 SETTINGS = {"speedup": "10", "controller_hosts": "1", "tournament_workers": "2"}
 RACE = {"track": "oval", "laps": 1, "karts": [{"controller": "fixed-lqng"}, {"controller": "lane-follower"}]}
 LONG_RACE = {**RACE, "laps": 20}

@@ -29,7 +29,7 @@ from support.live_server import LiveServer, server_settings
 if TYPE_CHECKING:
     from playwright.sync_api import Page
 
-pytestmark = requires_chromium
+pytestmark = [requires_chromium, pytest.mark.slow]
 
 
 @pytest.fixture(scope="module")

@@ -18,7 +18,7 @@ from support.live_server import LiveServer, server_settings, wait_for
 if TYPE_CHECKING:
     from playwright.sync_api import Page
 
-pytestmark = requires_chromium
+pytestmark = [requires_chromium, pytest.mark.slow]
 
 SETTLE_S = 10.0  # [s] a finished race's viewer URL is watched this long
 MAX_REQUESTS_WHILE_SETTLED = 25  # in SETTLE_S: a page and its assets, a few polls; a reload loop makes hundreds

@@ -28,7 +28,7 @@ from support.browser import (
 )
 from support.live_server import ServerThread
 
-pytestmark = requires_chromium
+pytestmark = [requires_chromium, pytest.mark.slow]
 
 
 @pytest.fixture(scope="module")

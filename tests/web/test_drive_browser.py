@@ -21,7 +21,7 @@ from typing import Any
 
 import httpx
 import pytest
-from support.browser import CHROMIUM_ARGS, chromium_binary
+from support.browser import CHROMIUM_ARGS, chromium_binary, requires_chromium
 from support.live_server import LiveServer, server_settings, start_race, wait_for
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
@@ -37,9 +37,7 @@ RACE = {
 BEFORE_THE_START = ("starting", "waiting", "countdown")
 
 
-pytestmark = pytest.mark.skipif(
-    chromium_binary() is None, reason="no chromium binary (run scripts/install_browser.sh to install Debian's)"
-)
+pytestmark = [requires_chromium, pytest.mark.slow]
 
 # the page's gamepad: whatever the test puts in window.__pad (null: none connected)
 FAKE_GAMEPADS = """
