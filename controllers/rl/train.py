@@ -167,6 +167,10 @@ def make_model(venv: VecNormalize, ppo: PPOConfig) -> PPO:
             "net_arch": {"pi": list(ppo.hidden), "vf": list(ppo.hidden)},
             "activation_fn": torch.nn.Tanh,
             "log_std_init": ppo.log_std_init,
+            # SB3's Adam settings (eps 1e-5) with the multi-tensor update: the same arithmetic bit for bit (checked
+            # against the per-tensor loop, which torch picks by default on the CPU) at a fraction of the Python
+            # overhead per gradient step
+            "optimizer_kwargs": {"eps": 1e-5, "foreach": True},
         },
         seed=ppo.seed,
         device="cpu",

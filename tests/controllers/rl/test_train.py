@@ -79,9 +79,10 @@ def test_a_shipped_agent_fine_tunes_from_its_inference_files(tmp_path: Path) -> 
     assert tuned.timesteps >= 4096 and (tmp_path / "tuned" / MODEL).exists()
 
 
-def test_the_pool_drives_opponents_by_a_numpy_copy_of_the_actor_frozen_when_added() -> None:
-    """A snapshot's mean action equals the torch actor's at the time it was added, row by row and batched, and
-    later training of the live policy does not move it; its samples are seeded by the pool."""
+def test_the_pool_drives_opponents_by_a_copy_of_the_actor_frozen_when_added() -> None:
+    """A snapshot's mean action (its numpy policy, and the float32 layers the pool drives by) equals the torch
+    actor's at the time it was added, row by row and batched, and later training of the live policy does not
+    move it; its samples are seeded by the pool."""
     import torch
 
     from controllers.rl.train import make_model
@@ -100,10 +101,13 @@ def test_the_pool_drives_opponents_by_a_numpy_copy_of_the_actor_frozen_when_adde
     frozen = pool.snapshots[0].policy
     assert np.allclose(frozen.mean(raw), expected, atol=1e-4)
     assert np.allclose(np.stack([frozen.mean(r) for r in raw]), frozen.mean(raw), atol=1e-12)
+    # the float32 layers compute what the live policy's float32 forward does
+    assert np.allclose(pool.snapshots[0].mean(raw), expected, atol=1e-6)
     with torch.no_grad():
         for p in model.policy.parameters():
             p.add_(1.0)
     assert np.allclose(frozen.mean(raw), expected, atol=1e-4)
+    assert np.allclose(pool.snapshots[0].mean(raw), expected, atol=1e-6)
     again = OpponentPool(2, 1.0, seed=7)
     again.add(model.policy, mean, var, 0)
     again.snapshots[0] = pool.snapshots[0]
