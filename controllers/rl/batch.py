@@ -19,8 +19,6 @@ from controllers.rl.observations import (
     build_frame,
     frame_size,
     place_phantoms,
-    target_indices,
-    target_points,
 )
 from controllers.rl.spawns import random_plan, spawn_race
 from sim_core import state as st
@@ -221,74 +219,19 @@ class RaceBatch:
 
     def _step_terms(self, block: Block, active: np.ndarray) -> np.ndarray:
         """Per-physics-step terms (times the 2 steps a decision holds) and the per-decision ray checks."""
-        wt, w = self.config.weights, block.world
-        f, i = w.fstate, w.istate
-        speed = f[:, :, st.F_SPEED]
-        idx = target_indices(w, block.tables)[:, :, :1]
-        target = target_points(block.tables, block.plan_lane, idx)[:, :, 0]
-        course = f[:, :, st.F_HEADING] + f[:, :, st.F_SLIP]
-        illegal = i[:, :, st.I_ILLEGAL_STEP]
-        rays_on_me = self._rays_on_me(w)
-        terms = {
-            "speed": DECISION_STEPS * rw.speed_reward(wt.speed, speed, self.kart.top_speed),
-            "direction": DECISION_STEPS * rw.direction_reward(wt.direction, w.positions, course, speed, target),
-            "acceleration": DECISION_STEPS * rw.acceleration_reward(wt.acceleration, block.accelerating),
-            "not_at_goal": DECISION_STEPS * rw.not_at_goal_penalty(wt.not_at_goal, active),
-            "swerve": rw.swerve_penalty(wt.swerve, illegal - block.illegal),
-            "wall_hit": rw.wall_hit_penalty(wt.wall_hit, w.ray_dist, w.ray_hit),
-            "player_hit": rw.player_hit_penalty(wt.player_hit, wt.player_hit_front, w.ray_dist, w.ray_hit),
-            "hit_by_player": rw.hit_by_player_penalty(wt.hit_by_player, rays_on_me),
-        }
-        block.illegal = illegal.copy()
-        block.terms = terms
-        return sum(np.where(active, v, 0.0) for v in terms.values())  # type: ignore[return-value]
-
-    def _rays_on_me(self, w: World) -> np.ndarray:
-        """(b, K) rays of other karts that found this kart within 1.5 m (charged to the nearest other kart)."""
-        hits = rw.player_rays(w.ray_dist, w.ray_hit).sum(axis=-1)
-        if self.n_karts == 2:
-            return hits[:, ::-1].astype(float)
-        pos = w.positions
-        gap = np.hypot(*(pos[:, :, None, :] - pos[:, None, :, :]).transpose(3, 0, 1, 2))
-        gap[:, np.arange(self.n_karts), np.arange(self.n_karts)] = np.inf
-        nearest = gap.argmin(axis=2)
-        out = np.zeros(hits.shape)
-        rows = np.repeat(np.arange(hits.shape[0]), self.n_karts)
-        np.add.at(out, (rows, nearest.ravel()), hits.ravel())
-        return out
+        w = block.world
+        terms, total = rw.decision_terms(
+            self.config.weights, self.kart.top_speed, w, block.tables.points, block.plan_lane, block.accelerating,
+            active, block.illegal,
+        )  # fmt: skip
+        block.illegal = w.istate[:, :, st.I_ILLEGAL_STEP].copy()
+        block.terms = dict(zip(rw.DECISION_TERMS, terms, strict=True))
+        return total
 
     def _checkpoint_terms(self, block: Block, active: np.ndarray) -> np.ndarray:
         """Terms scored on passing a checkpoint, and the reverse penalty."""
-        wt, w, t = self.config.weights, block.world, block.tables
-        f, i = w.fstate, w.istate
-        passed = i[:, :, st.I_CP_PASSED].copy()
-        since = self._since(block, f, i)
-        out = np.zeros(passed.shape)
-        reversed_ = active & (passed == block.passed) & (block.since < t.length / 2) & (since > t.length / 2)
-        out += np.where(reversed_, rw.reverse_penalty(wt.reverse, np.zeros(passed.shape)), 0.0)
-        rows = np.arange(passed.shape[0])
-        for k in range(self.n_karts):  # kart by kart: two karts may reach one checkpoint in one decision
-            crossed = active[:, k] & (passed[:, k] > block.passed[:, k])
-            if not crossed.any():
-                continue
-            r = rows[crossed]
-            m = np.clip(passed[r, k] + 1, 0, block.reach_count.shape[1] - 1)
-            order = block.reach_count[r, m]
-            time = f[r, k, st.F_CROSS_TIME]
-            first = np.where(order == 0, time, block.first_time[r, m])
-            block.first_time[r, m] = first
-            block.reach_count[r, m] += 1
-            c = np.mod(passed[r, k], t.n_checkpoints)
-            lane = block.plan_lane[r, k, c]
-            lane_miss = np.abs(f[r, k, st.F_D] - t.offsets[c, lane])
-            speed_miss = f[r, k, st.F_CROSS_SPEED] - block.plan_speed[r, k, c]
-            out[r, k] += (
-                rw.checkpoint_base_reward(wt.checkpoint_base, order)
-                + rw.checkpoint_time_reward(wt.checkpoint_time, order, time, self.horizon)
-                + rw.behind_opponent_penalty(wt.behind_opponent, (time - first) / DT)
-                + rw.target_lane_reward(wt.target_lane, lane_miss)
-                + rw.target_speed_reward(wt.target_speed, speed_miss, self.config.agent == "mcts-rl")
-            )
-        block.passed = passed
-        block.since = since
+        out, block.passed, block.since = rw.checkpoint_terms(
+            self.config.weights, self.config.agent == "mcts-rl", self.horizon, block.world, block.tables,
+            block.plan_lane, block.plan_speed, active, block.passed, block.since, block.reach_count, block.first_time,
+        )  # fmt: skip
         return out

@@ -9,16 +9,23 @@ section 6) differs from the printed equation, the code's form is used and the do
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from controllers.rl.config import (
+    DECISION_STEPS,
     FRONT_RAYS,
     LANE_DEADZONE,
     OPPONENT_THRESHOLD,
     POSITION_FACTORS,
     SPEED_BIN,
     WALL_THRESHOLDS,
+    RewardWeights,
 )
+from controllers.rl.observations import TrackTables
+from sim_core import state as st
+from sim_core.params import DT
 from sim_core.state import HIT_KART, HIT_WALL
+from sim_core.world import World
 
 WALL_THRESHOLD_ARRAY = np.asarray(WALL_THRESHOLDS)
 FRONT_RAY_MASK = np.isin(np.arange(len(WALL_THRESHOLDS)), FRONT_RAYS)
@@ -133,3 +140,236 @@ def reverse_penalty(weight: float, checkpoints_back: np.ndarray) -> np.ndarray:
     already passed, driving the wrong way (``checkpoints_back`` = 0 for the last one passed)."""
     back = np.asarray(checkpoints_back, dtype=float)
     return np.where(back >= 0, -weight * (back + 1.0), 0.0)
+
+
+# ---------------------------------------------------------------- the training batch's sums, compiled
+# The training batch scores every race of a World each decision. As numpy over ~20 races per track the terms
+# cost ~40 array calls per track, most of the environment's step; these loops compute the same terms with the
+# same arithmetic, operation by operation and in the same order (libm's cos/sin/hypot/pow, no fused
+# multiply-add), so the rewards are bit-identical to composing the functions above.
+DECISION_TERMS: tuple[str, ...] = (
+    "speed",
+    "direction",
+    "acceleration",
+    "not_at_goal",
+    "swerve",
+    "wall_hit",
+    "player_hit",
+    "hit_by_player",
+)
+
+
+def decision_terms(
+    weights: RewardWeights,
+    top_speed: float,
+    world: World,
+    points: np.ndarray,
+    plan_lane: np.ndarray,
+    accelerating: np.ndarray,
+    active: np.ndarray,
+    last_illegal: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The per-decision terms of every kart of ``world`` ((len(DECISION_TERMS), B, K), in that order) and their
+    sum over the ``active`` karts (B, K): the per-step terms times the 2 steps a decision holds, the swerve
+    penalty of the illegal lane changes since ``last_illegal``, the ray terms of the rays now. The direction
+    term aims at the next checkpoint's target point (``points`` (N, lanes + 1, 2) under ``plan_lane``)."""
+    f = world.fstate
+    terms = np.empty((len(DECISION_TERMS), f.shape[0], f.shape[1]))
+    total = np.empty(f.shape[:2])
+    w = np.array(
+        [
+            weights.speed,
+            weights.direction,
+            weights.acceleration,
+            weights.not_at_goal,
+            weights.swerve,
+            weights.wall_hit,
+            weights.player_hit,
+            weights.player_hit_front,
+            weights.hit_by_player,
+        ]
+    )
+    _decision_terms(
+        w, float(top_speed), f, world.istate, world.ray_dist, world.ray_hit, points, plan_lane,
+        np.asarray(accelerating, dtype=np.float64), np.asarray(active, dtype=np.bool_), last_illegal,
+        WALL_THRESHOLD_ARRAY, FRONT_RAY_MASK, terms, total,
+    )  # fmt: skip
+    return terms, total
+
+
+@njit(cache=True)
+def _maximum(a: float, b: float) -> float:
+    """``np.maximum`` of two floats (NaN first wins, ``a`` on a tie)."""
+    return a if a >= b or np.isnan(a) else b
+
+
+@njit(cache=True)
+def _found_kart(f: np.ndarray, b: int, k: int) -> int:
+    """The kart that kart ``k``'s rays found: the other one of two, else the nearest other kart (np.argmin of
+    the gaps: the first smallest, or the first NaN)."""
+    n_karts = f.shape[1]
+    if n_karts == 2:
+        return 1 - k
+    j, gap = 0, np.inf
+    for m in range(n_karts):
+        d = np.inf
+        if m != k:
+            d = np.hypot(f[b, k, st.F_X] - f[b, m, st.F_X], f[b, k, st.F_Y] - f[b, m, st.F_Y])
+        if np.isnan(d):
+            return m
+        if d < gap:
+            j, gap = m, d
+    return j
+
+
+@njit(cache=True)
+def _decision_terms(
+    w: np.ndarray,
+    top: float,
+    f: np.ndarray,
+    i: np.ndarray,
+    ray_dist: np.ndarray,
+    ray_hit: np.ndarray,
+    points: np.ndarray,
+    plan_lane: np.ndarray,
+    accelerating: np.ndarray,
+    active: np.ndarray,
+    last_illegal: np.ndarray,
+    wall_h: np.ndarray,
+    front: np.ndarray,
+    terms: np.ndarray,
+    total: np.ndarray,
+) -> None:
+    n_races, n_karts, n_rays = ray_dist.shape
+    n = points.shape[0]
+    hits = np.zeros(n_karts)  # rays of each kart that found another kart within the threshold
+    for b in range(n_races):
+        for k in range(n_karts):
+            walls = players = fronts = 0
+            for r in range(n_rays):
+                d, h = ray_dist[b, k, r], ray_hit[b, k, r]
+                if d < wall_h[r] and h == HIT_WALL:
+                    walls += 1
+                if d < OPPONENT_THRESHOLD and h == HIT_KART:
+                    players += 1
+                    if front[r]:
+                        fronts += 1
+            hits[k] = players
+            speed = f[b, k, st.F_SPEED]
+            c = (i[b, k, st.I_CP_PASSED] + 1) % n
+            lane = plan_lane[b, k, c]
+            dx, dy = points[c, lane, 0] - f[b, k, st.F_X], points[c, lane, 1] - f[b, k, st.F_Y]
+            course = f[b, k, st.F_HEADING] + f[b, k, st.F_SLIP]
+            cos = (np.cos(course) * dx + np.sin(course) * dy) / _maximum(np.hypot(dx, dy), 1e-9)
+            terms[0, b, k] = DECISION_STEPS * (w[0] * speed / top)
+            terms[1, b, k] = DECISION_STEPS * (w[1] * cos * np.sign(speed))
+            terms[2, b, k] = DECISION_STEPS * (w[2] * accelerating[b, k])
+            terms[3, b, k] = DECISION_STEPS * (-w[3] * (1.0 if active[b, k] else 0.0))
+            terms[4, b, k] = -w[4] * float(i[b, k, st.I_ILLEGAL_STEP] - last_illegal[b, k])
+            terms[5, b, k] = -w[5] * float(walls)
+            terms[6, b, k] = -(w[6] * float(players) + w[7] * float(fronts))
+        # each kart's hits charged to the kart they found: the other one of two, else the nearest other kart
+        for k in range(n_karts):
+            terms[7, b, k] = 0.0
+        for k in range(n_karts):
+            j = _found_kart(f, b, k)
+            terms[7, b, j] += hits[k]
+        for k in range(n_karts):
+            terms[7, b, k] = -w[8] * terms[7, b, k]
+            acc = 0.0
+            for t in range(terms.shape[0]):
+                acc = acc + (terms[t, b, k] if active[b, k] else 0.0)
+            total[b, k] = acc
+
+
+def checkpoint_terms(
+    weights: RewardWeights,
+    scaled_speed: bool,
+    horizon: float,
+    world: World,
+    tables: TrackTables,
+    plan_lane: np.ndarray,
+    plan_speed: np.ndarray,
+    active: np.ndarray,
+    last_passed: np.ndarray,
+    last_since: np.ndarray,
+    reach_count: np.ndarray,
+    first_time: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(reward (B, K), checkpoints passed (B, K), metres since the last one (B, K)) of the terms scored on passing
+    a checkpoint since ``last_passed`` and of the reverse penalty (back over the last one: ``last_since`` under
+    half a lap, now over it). Kart by kart, as two karts may reach one checkpoint in one decision: the first
+    there sets ``first_time`` (B, M), each one counts in ``reach_count`` (B, M), both updated in place.
+    ``scaled_speed``: the target-speed term scales by D_vel (MCTS-RL)."""
+    f, i = world.fstate, world.istate
+    passed = i[:, :, st.I_CP_PASSED].copy()
+    since = np.mod(f[:, :, st.F_S] - tables.checkpoint_s[np.mod(passed, tables.n_checkpoints)], tables.length)
+    out = np.empty(passed.shape)
+    w = np.array(
+        [
+            weights.reverse,
+            weights.checkpoint_base,
+            weights.checkpoint_time,
+            weights.behind_opponent,
+            weights.target_lane,
+            weights.target_speed,
+        ]
+    )
+    _checkpoint_terms(
+        w, scaled_speed, float(horizon), float(tables.length), f, passed, since, tables.offsets, plan_lane,
+        plan_speed, np.asarray(active, dtype=np.bool_), last_passed, last_since, reach_count, first_time,
+        np.asarray(POSITION_FACTORS), out,
+    )  # fmt: skip
+    return out, passed, since
+
+
+@njit(cache=True)
+def _checkpoint_terms(
+    w: np.ndarray,
+    scaled: bool,
+    horizon: float,
+    length: float,
+    f: np.ndarray,
+    passed: np.ndarray,
+    since: np.ndarray,
+    offsets: np.ndarray,
+    plan_lane: np.ndarray,
+    plan_speed: np.ndarray,
+    active: np.ndarray,
+    last_passed: np.ndarray,
+    last_since: np.ndarray,
+    reach_count: np.ndarray,
+    first_time: np.ndarray,
+    factors: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    n_races, n_karts = passed.shape
+    n, last_m = offsets.shape[0], reach_count.shape[1] - 1
+    for b in range(n_races):
+        for k in range(n_karts):
+            back = active[b, k] and passed[b, k] == last_passed[b, k]
+            back = back and last_since[b, k] < length / 2 and since[b, k] > length / 2
+            out[b, k] = 0.0 + (-w[0] * (0.0 + 1.0) if back else 0.0)
+            if not (active[b, k] and passed[b, k] > last_passed[b, k]):
+                continue
+            m = min(max(passed[b, k] + 1, 0), last_m)
+            order = reach_count[b, m]
+            time = f[b, k, st.F_CROSS_TIME]
+            first = time if order == 0 else first_time[b, m]
+            first_time[b, m] = first
+            reach_count[b, m] += 1
+            c = passed[b, k] % n
+            lane_miss = np.abs(f[b, k, st.F_D] - offsets[c, plan_lane[b, k, c]])
+            speed_miss = np.abs(f[b, k, st.F_CROSS_SPEED] - plan_speed[b, k, c])
+            factor = factors[min(order, len(factors) - 1)]
+            lane_reward = w[4] / (1.0 if lane_miss <= LANE_DEADZONE else np.power(1.3, lane_miss))
+            speed_reward = w[5]
+            if scaled:
+                speed_reward = w[5] / (1.0 if speed_miss <= SPEED_BIN / 2 else np.power(1.1, speed_miss))
+            out[b, k] += (
+                w[1] * factor
+                + w[2] * factor * (horizon - time) / horizon
+                + -w[3] * _maximum((time - first) / DT, 0.0)
+                + lane_reward
+                + speed_reward
+            )
