@@ -2,7 +2,10 @@
 
 Runs a short training of MCTS-RL (warm-up excluded: the first update pays for compiling the kernels) and prints
 one JSON object last, with ``env_steps_per_s`` (learner decisions per second of wall time, the count that
-Stable-Baselines3's ``total_timesteps`` and the paper's 8M steps use). Run from the repo root:
+Stable-Baselines3's ``total_timesteps`` and the paper's 8M steps use), the learning time split into rollouts
+(``rollout_s``: races, actions, buffer) and PPO updates (``update_s``), and the process's CPU seconds
+(``cpu_s``: on a machine shared with other work, CPU time well under ``total_s`` means the run waited for a
+core). Run from the repo root:
 ``.venv/bin/python benchmarks/training.py`` (``--help``: the steps, races and rollout buffer; the smoke test runs
 it tiny).
 """
@@ -37,9 +40,9 @@ def main() -> None:
         warm = PPOConfig(total_steps=args.warm_steps, **sizes)
         train(env, warm, Path(tmp) / "warm")
         ppo = PPOConfig(total_steps=args.steps, **sizes)
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         result = train(env, ppo, Path(tmp) / "run")
-        total = time.perf_counter() - start
+        total, cpu = time.perf_counter() - start, time.process_time() - cpu
     print(
         json.dumps(
             {
@@ -49,7 +52,10 @@ def main() -> None:
                 "torch_threads": args.threads,
                 "steps": result.timesteps,
                 "learn_s": round(result.wall_s, 2),
+                "rollout_s": round(result.rollout_s, 2),
+                "update_s": round(result.update_s, 2),
                 "total_s": round(total, 2),
+                "cpu_s": round(cpu, 2),
                 "env_steps_per_s": round(result.env_steps_per_s),
             }
         )

@@ -48,6 +48,8 @@ class TrainResult:
     timesteps: int
     wall_s: float
     env_steps_per_s: float
+    rollout_s: float = 0.0  # of wall_s: collecting rollouts (the races, the policy's actions, the buffer)
+    update_s: float = 0.0  # of wall_s: the PPO updates (the epochs over each rollout)
     log: Path = field(init=False)
 
     def __post_init__(self) -> None:
@@ -63,6 +65,8 @@ class SelfPlayCallback(BaseCallback):
         self.next_save = self.next_swap = self.next_checkpoint = 0
         self.start = time.perf_counter()
         self.start_steps = 0
+        self.rollout_s = self.update_s = 0.0  # wall time in rollouts and in the updates between them
+        self._rollout_start = self._rollout_end = 0.0
 
     def _on_training_start(self) -> None:
         n = self.num_timesteps
@@ -89,7 +93,20 @@ class SelfPlayCallback(BaseCallback):
             self.next_checkpoint += self.ppo.checkpoint_steps
         return True
 
+    def _on_rollout_end(self) -> None:
+        self._rollout_end = time.perf_counter()
+        self.rollout_s += self._rollout_end - self._rollout_start
+
+    def finish_timing(self) -> None:
+        """Count the time since the last rollout (its update) once learning has returned."""
+        if self._rollout_end:
+            self.update_s += time.perf_counter() - self._rollout_end
+            self._rollout_end = 0.0
+
     def _on_rollout_start(self) -> None:
+        self._rollout_start = time.perf_counter()
+        if self._rollout_end:
+            self.update_s += self._rollout_start - self._rollout_end
         values = self.model.logger.name_to_value
         if "train/value_loss" not in values:
             return
@@ -226,12 +243,14 @@ def train(
     start_steps, start = model.num_timesteps, time.perf_counter()
     if remaining:
         model.learn(remaining, callback=callback, reset_num_timesteps=not resuming, progress_bar=progress_bar)
+        callback.finish_timing()
     wall = time.perf_counter() - start
     save(model, venv, out)
     if (out / LOG).exists():
         plot_curves(out / LOG, out / CURVES, title=f"{env.agent}: PPO self-play")
     done = model.num_timesteps - start_steps
-    return TrainResult(out, model.num_timesteps, wall, done / wall if wall > 0 else 0.0)
+    rate = done / wall if wall > 0 else 0.0
+    return TrainResult(out, model.num_timesteps, wall, rate, callback.rollout_s, callback.update_s)
 
 
 def record_settings(

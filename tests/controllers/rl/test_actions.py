@@ -7,7 +7,16 @@ from hypothesis import given
 from hypothesis import strategies as hs
 from scipy.stats import norm
 
-from controllers.rl.actions import ACCELERATE, BRAKE, COAST, most_probable_pedal, pedal_branch, world_actions
+from controllers.rl.actions import (
+    ACCELERATE,
+    BRAKE,
+    COAST,
+    branch_acceleration,
+    most_probable_pedal,
+    pedal_branch,
+    world_actions,
+)
+from sim_core.kart import STANDSTILL
 from sim_core.params import kart_preset
 
 
@@ -52,3 +61,32 @@ def test_brake_from_standstill_reverses_and_brake_at_speed_slows() -> None:
     assert out[2, 1] < 0.0  # braking at speed: a negative throttle that slows, never the reverse gear's hold
     coast, _ = world_actions(kart, np.array([0.0]), np.array([[0.0, 0.0]]))
     assert coast[0, 1] == 0.0
+
+
+def reference_world_actions(kart_name: str, speed: np.ndarray, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The action map composed of its array functions and the kart's own inverse."""
+    kart = kart_preset(kart_name)
+    a = np.nan_to_num(np.asarray(action, dtype=float), nan=0.0)
+    branch = pedal_branch(a[..., 1])
+    out = np.empty(a.shape)
+    out[..., 0] = np.clip(a[..., 0], -1.0, 1.0)
+    throttle = kart.throttle_for_acceleration(speed, branch_acceleration(kart, speed, branch))
+    out[..., 1] = np.where((branch == BRAKE) & (speed <= STANDSTILL), -1.0, throttle)
+    return out, branch
+
+
+def test_compiled_action_map_equals_the_array_functions_bit_for_bit() -> None:
+    """Every branch, standstill, rolling back, above top speed, out-of-range and non-finite actions."""
+    rng = np.random.default_rng(3)
+    speed = np.concatenate([rng.uniform(-4.0, 20.0, 3000), [0.0, 1e-3, 2e-3, -1e-3, 1e-4, 40.0]])
+    speed = np.resize(speed, (6, 501))
+    action = rng.uniform(-1.5, 1.5, (6, 501, 2))
+    action.reshape(-1)[rng.choice(action.size, 40, replace=False)] = [np.nan, np.inf, -np.inf, 1 / 3, -1 / 3] * 8
+    for name in ("paper", "original"):
+        got, got_branch = world_actions(kart_preset(name), speed, action)
+        want, want_branch = reference_world_actions(name, speed, action)
+        assert got.shape == want.shape and np.array_equal(got, want, equal_nan=True)
+        assert np.array_equal(got_branch, want_branch)
+    assert {BRAKE, COAST, ACCELERATE} == set(np.unique(want_branch))
+    one, branch = world_actions(kart_preset("paper"), np.array([0.0]), np.array([[0.2, -0.9]]))
+    assert one.shape == (1, 2) and branch.shape == (1,) and one[0, 1] == -1.0 and branch[0] == BRAKE
