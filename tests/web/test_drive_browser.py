@@ -13,6 +13,7 @@ when no chromium binary is installed.
 from __future__ import annotations
 
 import json
+import math
 import re
 import threading
 from collections.abc import Iterator
@@ -141,11 +142,14 @@ def _the_race_counts_down_with_nothing_moving(page: Any, telemetry: Telemetry) -
         if countdown.is_visible():
             shown.add(countdown.inner_text())
         page.wait_for_timeout(50)
-    assert shown <= {"1", "2", "3"} and len(shown) >= 2, shown
+    # the page shows the count (on a loaded machine it may paint only some of its numbers: the telemetry below
+    # says the count ran through)
+    assert shown and shown <= {"1", "2", "3"}, shown
     wait_for(lambda: any(f["status"] == "running" for f in telemetry.frames), 10)
     before = [f for f in telemetry.frames if f["status"] in BEFORE_THE_START]
     counting = [f for f in before if f["status"] == "countdown"]
     assert counting and all(0 < f["countdown"] <= 3.0 for f in counting)
+    assert len({math.ceil(f["countdown"]) for f in counting}) >= 2  # it counted down, not one number held
     assert all(positions(f) == positions(before[0]) and f["step"] == 0 for f in before), "a kart moved early"
 
 
