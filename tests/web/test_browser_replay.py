@@ -79,8 +79,13 @@ def _replay_plays_pauses_and_scrubs(page: Page, base: str, race_id: str) -> None
 
     page.get_by_role("button", name="Pause").click()
     page.get_by_role("button", name="Play").wait_for()
-    page.wait_for_timeout(300)  # the last frame in flight
-    paused = _kart_positions(page)
+    # the frames already in flight land first (later on a loaded machine): wait until two reads agree
+    paused, deadline = _kart_positions(page), time.monotonic() + 10
+    page.wait_for_timeout(300)
+    while (now := _kart_positions(page)) != paused:
+        assert time.monotonic() < deadline, "the replay never paused"
+        paused = now
+        page.wait_for_timeout(300)
     page.wait_for_timeout(700)
     assert _kart_positions(page) == paused, "karts moved while paused"
 

@@ -83,7 +83,9 @@ class Telemetry:
 @pytest.fixture(scope="module")
 def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
     db = tmp_path_factory.mktemp("drive-browser") / "karting.db"
-    with LiveServer(server_settings(db, viewer_enabled=True, speedup=1.0, keep_finished_s=60.0)) as server:
+    # the race waits up to 2 min for the page's 3D view (30 s by default), which a loaded machine may take to load
+    settings = server_settings(db, viewer_enabled=True, speedup=1.0, keep_finished_s=60.0, view_ready_wait_s=120.0)
+    with LiveServer(settings) as server:
         yield server
 
 
