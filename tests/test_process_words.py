@@ -1,10 +1,11 @@
 """The repository says what is true now: no tracked text file outside ``docs/history.md`` names a work session
-("session 12"), an issue number ("issue 11", "issue #11") or a path under the retired top-level results folder.
+(the word followed by its number), an issue number (with or without ``#``) or a path under the retired
+top-level results folder.
 
 History (dates, commits, what changed when) has one home, ``docs/history.md``; everywhere else a reader finds
 the code and its measured behaviour as they are. The test reads the files git tracks (``git ls-files``), skips
-binary files, and lists every offending line, so a failure says where to look. This file spells out examples of
-what it catches, so it is exempt too.
+binary files, and lists every offending line, so a failure says where to look. The examples below are assembled
+from parts, so this file passes its own check.
 """
 
 from __future__ import annotations
@@ -18,9 +19,9 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 HISTORY = "docs/history.md"
-EXEMPT = frozenset({HISTORY, "tests/test_process_words.py"})  # the history, and the examples below
+EXEMPT = frozenset({HISTORY})
 
-# "session 12", "Session12", "issue 11", "issue #11", any case; the digits make the word a reference to a
+# the words for a work session or an issue followed by a number, any case; the digits make the word a reference to a
 # round of work, where "race session" or "a GitHub issue" are ordinary words
 PROCESS_WORDS = re.compile(r"\bsession ?[0-9]+|\bissue ?#?[0-9]+", re.IGNORECASE)
 # a path that starts at the top-level results folder: not docs/results/..., not my_results/ or test-results/;
@@ -62,13 +63,15 @@ def offending_lines(name: str, text: str) -> list[str]:
 
 def test_the_patterns_catch_what_they_should_and_nothing_else() -> None:
     """The two patterns on their own: what counts as a process word or a results path, and what does not."""
-    caught = ["Session 28: the check", "since session 18", "issue 11's series", "see Issue #14", "session12"]
-    caught_paths = ["results/rl/README.md", "(`results/issue11/`)", "default results/tournaments/ID"]
+    session, issue, results = "ses" + "sion", "is" + "sue", "results" + "/"
+    caught = [f"{session.title()} 28: the check", f"since {session} 18", f"{issue} 11's series"]
+    caught += [f"see {issue.title()} #14", f"{session}12"]
+    caught_paths = [f"{results}rl/README.md", f"(`{results}{issue}11/`)", f"default {results}tournaments/ID"]
     passed = ["a race session", "the issues' notes", "docs/results/README.md", "test-results/x", "my_results/a"]
     assert all(PROCESS_WORDS.search(line) for line in caught)
     assert all(RESULTS_PATH.search(line) for line in caught_paths)
     assert not any(PROCESS_WORDS.search(line) or RESULTS_PATH.search(line) for line in passed)
-    assert offending_lines("x.md", "fine\nas of session 3\n") == ["x.md:2: as of session 3"]
+    assert offending_lines("x.md", f"fine\nas of {session} 3\n") == [f"x.md:2: as of {session} 3"]
 
 
 def test_no_tracked_file_outside_the_history_names_sessions_issues_or_the_results_folder() -> None:
