@@ -25,6 +25,7 @@ from server.routes.drive import MAX_MESSAGE_BYTES as DRIVE_LIMIT
 
 SERVER_LIMIT = 1 << 20  # [bytes] the default ws_max_message_bytes
 RACE = {"track": "oval", "laps": 20, "karts": [{"controller": "human"}, {"controller": "lane-follower"}]}
+WINDOW_S = 3.0  # [s] the least time over which the other race's tick rate is measured
 MEMORY_SLACK = 0.10  # the server's RSS may end at most this much above its baseline
 
 
@@ -87,13 +88,12 @@ def read_until_applied(ws: ClientConnection, seq: int, timeout: float = 10.0) ->
 
 
 class SteadyDriver(threading.Thread):
-    """Drives the other race at 50 Hz during the fuzzing and counts the states that come back."""
+    """Drives the other race at 50 Hz during the fuzzing and keeps the input numbers its states say were applied."""
 
     def __init__(self, url: str) -> None:
         super().__init__(daemon=True)
         self.url = url
         self.stop = threading.Event()
-        self.steps: list[int] = []
         self.applied: list[int] = []
         self.errors: list[str] = []
         self.failure: BaseException | None = None
@@ -111,14 +111,23 @@ class SteadyDriver(threading.Thread):
                             message = json.loads(ws.recv(timeout=left))
                         except TimeoutError:
                             break
-                        if message["type"] == "state":
-                            self.steps.append(message["step"])
-                            if message["input_seq"] is not None:
-                                self.applied.append(message["input_seq"])
+                        if message["type"] == "state" and message["input_seq"] is not None:
+                            self.applied.append(message["input_seq"])
                         elif message["type"] == "error":
                             self.errors.append(message["error"])
         except BaseException as exc:
             self.failure = exc
+
+
+def ticks(client: Any, race_id: str) -> tuple[float, int]:
+    """(now [s, monotonic], the race's ticks so far): the server's own count, which a test thread starved by the
+    fuzzing cannot undercount."""
+    return time.monotonic(), int(client.get(f"/api/races/{race_id}").json()["tick_stats"]["ticks"])
+
+
+def tick_rate(start: tuple[float, int], end: tuple[float, int]) -> float:
+    """[Hz] ticks per second between two :func:`ticks` readings."""
+    return (end[1] - start[1]) / (end[0] - start[0])
 
 
 def rss(server: ServerProcess) -> int:
@@ -151,7 +160,9 @@ def test_fuzzing_leaves_the_session_alive_others_unaffected_and_memory_near_its_
         ws.send(json.dumps({"steer": 0.0, "throttle": 0.5, "seq": 1}))
         read_until_applied(ws, 1)
         baseline = rss(server)
-        started = time.monotonic()
+        before = ticks(client, other["id"])
+        time.sleep(WINDOW_S)  # the other race's pace before the fuzzing, on this machine as loaded now
+        started = ticks(client, other["id"])
 
         for message in fuzz_messages(random.Random(14), 3000):
             ws.send(message)
@@ -162,13 +173,16 @@ def test_fuzzing_leaves_the_session_alive_others_unaffected_and_memory_near_its_
 
         ws.send(json.dumps({"steer": 0.2, "throttle": 0.9, "seq": 424242}))
         state = read_until_applied(ws, 424242, 30)  # the fuzzed session obeys its driver still
-        elapsed = time.monotonic() - started
+        time.sleep(max(0.0, started[0] + WINDOW_S - time.monotonic()))
+        ended = ticks(client, other["id"])
     steady.stop.set()
     steady.join(10)
 
     assert steady.failure is None, repr(steady.failure)
     assert not steady.errors and steady.applied and steady.applied == sorted(steady.applied)
-    assert (steady.steps[-1] - steady.steps[0]) / elapsed >= 40  # its race ticked on at about 50 Hz
+    # the other race ticked on at about 50 Hz, or (on a machine loaded by other work) at its pace before the fuzzing
+    pace, fuzzed_pace = tick_rate(before, started), tick_rate(started, ended)
+    assert fuzzed_pace >= 40 or fuzzed_pace >= 0.8 * pace, (pace, fuzzed_pace)
     assert state["status"] == "running"
     detail = client.get(f"/api/races/{fuzzed['id']}").json()
     assert detail["status"] == "running" and detail["error"] is None
