@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 
-.PHONY: setup browser compose run test lint bench tracks clean
+.PHONY: setup browser compose run test lint bench tracks screenshots clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -34,6 +34,9 @@ lint: setup  ## ruff (rules, complexity limits), ruff format --check, mypy on ev
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
+
+screenshots: setup browser  ## refresh docs/screenshots/ (the README's pictures) with the real-browser tests
+	KARTING_README_SCREENSHOTS=1 $(BIN)/python -m pytest -q tests/web -k browser
 
 bench: setup
 	$(BIN)/python benchmarks/sim_step.py

@@ -64,7 +64,7 @@ class Settings(BaseSettings):
     plan_budget_s: float = Field(
         default=0.3,
         gt=0.0,
-        description="[s] wall time a planner that can cut a plan short (mcts-lqng's rollout check) spends on one",
+        description="[s] wall time a planner that can cut a plan short (a TimeBoundedPlanner) spends on one",
     )
     plan_timeout_s: float = Field(
         default=10.0, gt=0.0, description="[s] wall time after which a plan request is given up"

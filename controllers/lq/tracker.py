@@ -259,13 +259,6 @@ class LQNGTracker:
     def last_steer(self, steer: float) -> None:
         self._steer = steer
 
-    def start_steering(self, observation: Observation, plan: Plan | None) -> float:
-        """Take the steer the tracker asks for at ``observation``, unfiltered, as its last steer and return it: a
-        tracker started mid-race (a planner's rollout, :mod:`controllers.rollout_check`) would otherwise steer
-        from straight ahead at a limited rate, and run wide out of a corner it is already in."""
-        self._steer = self._solved_action(observation, plan).steer
-        return self._steer
-
     def _solve(
         self, players: list[KartView], targets: list[tuple[float, float, float, float]], plan: Plan | None
     ) -> tuple[np.ndarray, np.ndarray]:

@@ -163,8 +163,8 @@ class MCTSPlanner:
         return self._line_lanes
 
     def commit(self, plan: Plan) -> None:
-        """Hold ``plan``'s ego lanes as the commitment of the next search (a plan changed after the search, by a
-        :class:`~controllers.rollout_check.RolloutCheck`, is the one the kart drives)."""
+        """Hold ``plan``'s ego lanes as the commitment of the next search (a plan changed after the search by a
+        wrapping planner is the one the kart drives)."""
         self._committed = {w.checkpoint: w.lane for w in plan.ego_waypoints}
 
     @property

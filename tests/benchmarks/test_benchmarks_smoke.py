@@ -34,10 +34,6 @@ TINY: dict[str, tuple[list[str], set[str]]] = {
         ["--repeats", "1", "--tracks", "oval"],
         {"max_seconds_per_track", "seconds_per_track", "lap_time_ratio_optimised_vs_handset"},
     ),
-    "rollout_check.py": (
-        ["--rounds", "1", "--depths", "1"],
-        {"search_plan_ms", "checked_plan_ms", "rollouts_per_check", "ms_per_rollout", "tree_speedup"},
-    ),
     "serve_loop.py": (
         ["--sessions", "1", "--window", "1", "--settle", "0.5", "--inputs", "10"],
         {"p50_jitter_ms_1_sessions", "p99_jitter_ms_1_sessions", "overruns_1_sessions", "drive_reflect_ticks"},

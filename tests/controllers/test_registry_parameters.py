@@ -286,7 +286,7 @@ def test_an_agent_string_is_a_name_and_its_parameters(agent: str, name: str, ove
         ("fixed-lqng:speed_scale=0.8:speed_scale=0.9", ValueError, "given twice"),
         ("fixed-lqng:speed_scale=fast", ParameterError, "must be a float"),
         ("mcts-lqng:horizon=17", ParameterError, "above its maximum"),
-        ("mcts-lqng:rollout_check_depth=3", ParameterError, "unknown"),
+        ("mcts-lqng:temperature=3", ParameterError, "unknown"),
     ],
 )
 def test_a_bad_agent_string_says_what_is_wrong(agent: str, error: type[Exception], says: str) -> None:

@@ -1,9 +1,9 @@
 """Replays in a real browser: Debian's chromium (driven by Playwright) plays, pauses and scrubs a finished race's
 replay, reads its race page (charts and incidents), and sees a live viewer move to the replay when its race ends.
 
-Through the real server (3D views on, a two-lap race at 20 times real time, a temporary database). Screenshots go
-to ``test-artifacts/`` and, for the README, ``docs/screenshots/`` (``replay.png``, ``race-page.png``). Skipped
-only when no chromium binary is installed.
+Through the real server (3D views on, a two-lap race at 20 times real time, a temporary database). Screenshots go to
+``test-artifacts/`` and, under ``make screenshots``, ``docs/screenshots/`` (``replay.png``, ``race-page.png``).
+Skipped only when no chromium binary is installed.
 """
 
 from __future__ import annotations
@@ -18,9 +18,10 @@ import pytest
 from support.browser import (
     ARTIFACTS,
     CAMERA_NEAR_KART0,
-    CHROMIUM_ARGS,
     NODE_POSITION,
-    chromium_binary,
+    PAGE_2D,
+    VIEW_3D,
+    browser_page,
     readme_screenshot,
     requires_chromium,
 )
@@ -161,27 +162,12 @@ def test_replay_player_and_race_page_in_a_real_browser(finished_race: tuple[str,
     """A finished race: its viewer address opens the replay player, which plays, pauses and scrubs; its page
     draws the charts and the incident timeline; a live viewer of a race that ends moves to its replay. No
     request may leave the machine."""
-    from playwright.sync_api import sync_playwright
-
     base, race_id = finished_race
-    ARTIFACTS.mkdir(exist_ok=True)
     outside: list[str] = []
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=chromium_binary(), args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page(viewport={"width": 1280, "height": 900})
-            page.on(
-                "request",
-                lambda r: (
-                    outside.append(r.url)
-                    if not r.url.startswith(("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:"))
-                    else None
-                ),
-            )
-            page.set_default_timeout(60_000)
-            _replay_plays_pauses_and_scrubs(page, base, race_id)
-            _race_page_shows_charts_and_incidents(page, base, race_id)
-            _live_viewer_moves_to_the_replay(page, base)
-        finally:
-            browser.close()
+    with browser_page(VIEW_3D, outside=outside) as page:
+        _replay_plays_pauses_and_scrubs(page, base, race_id)
+        page.set_viewport_size(PAGE_2D)
+        _race_page_shows_charts_and_incidents(page, base, race_id)
+        page.set_viewport_size(VIEW_3D)
+        _live_viewer_moves_to_the_replay(page, base)
     assert not outside, f"requests left the machine: {outside[:5]}"

@@ -12,15 +12,17 @@ from typing import TYPE_CHECKING
 
 import httpx
 import pytest
-from support.browser import CHROMIUM_ARGS, chromium_binary, readme_screenshot, requires_chromium
+from support.browser import PAGE_2D, VIEW_3D, browser_page, readme_screenshot, requires_chromium
 from support.live_server import LiveServer, server_settings, wait_for
 
 if TYPE_CHECKING:
-    from playwright.sync_api import Page
+    from playwright.sync_api import Page, ViewportSize
+
+PHONE: ViewportSize = {"width": 390, "height": 844}
 
 pytestmark = [requires_chromium, pytest.mark.slow]
 
-SETTLE_S = 10.0  # [s] a finished race's viewer URL is watched this long
+SETTLE_S = 6.0  # [s] a finished race's viewer URL is watched this long
 MAX_REQUESTS_WHILE_SETTLED = 25  # in SETTLE_S: a page and its assets, a few polls; a reload loop makes hundreds
 
 
@@ -79,45 +81,37 @@ def test_a_finished_races_viewer_settles(short_lived_race: tuple[str, str]) -> N
     requests and websockets in 10 s either way (a wait page that reloads itself, or a view that reconnects, makes
     hundreds). A race over with nothing recorded answers the
     "race over" page instead (``web/static/race-over.html``)."""
-    from playwright.sync_api import sync_playwright
-
     base, race_id = short_lived_race
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=chromium_binary(), args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page(viewport={"width": 1024, "height": 640})
-            page.set_default_timeout(60_000)
-            traffic = Traffic(page)
-            page.goto(f"{base}/races/{race_id}/viewer/")  # the viser page, or the wait page while it starts
-            wait_for(lambda: _live_view_closed(base, race_id), 90, 0.2)
-            page.wait_for_url(f"**/races/{race_id}/replay/**", timeout=60_000)
-            _check_the_replay_player(page, race_id)
-            traffic.reset()
-            page.wait_for_timeout(SETTLE_S * 1000)
-            assert traffic.loads == 0, traffic.summary()
-            assert len(traffic.requests) <= MAX_REQUESTS_WHILE_SETTLED, traffic.summary()
-            assert traffic.websockets <= 1, traffic.summary()
-            _check_the_replay_player(page, race_id)
+    with browser_page(VIEW_3D) as page:
+        traffic = Traffic(page)
+        page.goto(f"{base}/races/{race_id}/viewer/")  # the viser page, or the wait page while it starts
+        wait_for(lambda: _live_view_closed(base, race_id), 90, 0.2)
+        page.wait_for_url(f"**/races/{race_id}/replay/**", timeout=60_000)
+        _check_the_replay_player(page, race_id)
+        traffic.reset()
+        page.wait_for_timeout(SETTLE_S * 1000)
+        assert traffic.loads == 0, traffic.summary()
+        assert len(traffic.requests) <= MAX_REQUESTS_WHILE_SETTLED, traffic.summary()
+        assert traffic.websockets <= 1, traffic.summary()
+        _check_the_replay_player(page, race_id)
 
-            # long after the end: a fresh visit settles on its first load
-            traffic.reset()
-            page.goto(f"{base}/races/{race_id}/viewer/")
-            page.wait_for_timeout(SETTLE_S * 1000)
-            assert traffic.loads <= 2 and traffic.websockets <= 1, traffic.summary()
-            assert len(traffic.requests) <= MAX_REQUESTS_WHILE_SETTLED, traffic.summary()
-            _check_the_replay_player(page, race_id)
+        # long after the end: a fresh visit settles on its first load
+        traffic.reset()
+        page.goto(f"{base}/races/{race_id}/viewer/")
+        page.wait_for_timeout(SETTLE_S * 1000)
+        assert traffic.loads <= 2 and traffic.websockets <= 1, traffic.summary()
+        assert len(traffic.requests) <= MAX_REQUESTS_WHILE_SETTLED, traffic.summary()
+        _check_the_replay_player(page, race_id)
 
-            unknown = page.goto(f"{base}/races/no-such-race/viewer/")
-            assert unknown is not None and unknown.status == 404
-            assert "No race" in page.locator("h2").inner_text()
-        finally:
-            browser.close()
+        unknown = page.goto(f"{base}/races/no-such-race/viewer/")
+        assert unknown is not None and unknown.status == 404
+        assert "No race" in page.locator("h2").inner_text()
 
 
 def test_the_api_docs_render_offline(short_lived_race: tuple[str, str]) -> None:
     """/docs (Swagger UI) and /redoc (ReDoc) render the API's operations from assets the app serves: every
     request the browser makes is recorded by route interception, and none may leave 127.0.0.1."""
-    from playwright.sync_api import Route, sync_playwright
+    from playwright.sync_api import Route
 
     base, _race_id = short_lived_race
     hosts: list[str] = []
@@ -130,48 +124,34 @@ def test_the_api_docs_render_offline(short_lived_race: tuple[str, str]) -> None:
         else:
             route.abort()
 
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=chromium_binary(), args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page(viewport={"width": 1280, "height": 900})
-            page.set_default_timeout(60_000)
-            page.route("**/*", record)
-            page.goto(f"{base}/docs")
-            page.locator(".opblock").first.wait_for()
-            paths = page.locator(".opblock-summary-path").all_inner_texts()
-            assert "/api/races" in paths and "/api/races/{race_id}/result" in paths, paths
-            page.goto(f"{base}/redoc")
-            page.get_by_text("Start a race", exact=False).first.wait_for()
-            assert page.locator("[data-section-id^='operation/']").count() >= 5
-        finally:
-            browser.close()
+    with browser_page(PAGE_2D) as page:
+        page.route("**/*", record)
+        page.goto(f"{base}/docs")
+        page.locator(".opblock").first.wait_for()
+        paths = page.locator(".opblock-summary-path").all_inner_texts()
+        assert "/api/races" in paths and "/api/races/{race_id}/result" in paths, paths
+        page.goto(f"{base}/redoc")
+        page.get_by_text("Start a race", exact=False).first.wait_for()
+        assert page.locator("[data-section-id^='operation/']").count() >= 5
     assert hosts and set(hosts) <= {"127.0.0.1"}, f"requests left 127.0.0.1: {sorted(set(hosts))}"
 
 
 def test_the_start_page_fits_a_phone(short_lived_race: tuple[str, str]) -> None:
     """At 390 px wide (a phone) the start page never scrolls sideways, lists the race and its form still works:
     the form's limits are the API's (GET /api/limits)."""
-    from playwright.sync_api import sync_playwright
-
     base, race_id = short_lived_race
     limits = httpx.get(f"{base}/api/limits", timeout=30).json()
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=chromium_binary(), args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page(viewport={"width": 390, "height": 844})
-            page.set_default_timeout(60_000)
-            page.goto(f"{base}/")
-            page.locator(f'tr[data-race-id="{race_id}"]').wait_for()
-            page.locator("#karts input").first.wait_for()
-            widths = page.evaluate("() => [document.documentElement.scrollWidth, window.innerWidth]")
-            assert widths[0] <= widths[1], f"the page scrolls sideways: {widths}"
-            assert page.locator("#laps").get_attribute("max") == str(limits["max_laps"])
-            counts = page.locator("#n-karts option").all_inner_texts()
-            assert counts == [str(n) for n in range(limits["min_karts"], limits["max_karts"] + 1)]
-            name = page.get_by_label("name of kart 1")
-            assert name.get_attribute("maxlength") == str(limits["max_name_length"])
-            assert name.input_value() == "mcts-lqng 1"  # the API's default name
-            assert "1 lap" in page.locator(f'tr[data-race-id="{race_id}"]').inner_text()
-            readme_screenshot(page, "start-phone.png", full_page=True)
-        finally:
-            browser.close()
+    with browser_page(PHONE) as page:
+        page.goto(f"{base}/")
+        page.locator(f'tr[data-race-id="{race_id}"]').wait_for()
+        page.locator("#karts input").first.wait_for()
+        widths = page.evaluate("() => [document.documentElement.scrollWidth, window.innerWidth]")
+        assert widths[0] <= widths[1], f"the page scrolls sideways: {widths}"
+        assert page.locator("#laps").get_attribute("max") == str(limits["max_laps"])
+        counts = page.locator("#n-karts option").all_inner_texts()
+        assert counts == [str(n) for n in range(limits["min_karts"], limits["max_karts"] + 1)]
+        name = page.get_by_label("name of kart 1")
+        assert name.get_attribute("maxlength") == str(limits["max_name_length"])
+        assert name.input_value() == "mcts-lqng 1"  # the API's default name
+        assert "1 lap" in page.locator(f'tr[data-race-id="{race_id}"]').inner_text()
+        readme_screenshot(page, "start-phone.png", full_page=True)

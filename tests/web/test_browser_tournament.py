@@ -1,9 +1,9 @@
-"""The tournament pages in a real browser: Debian's chromium (driven by Playwright) launches a tiny round robin
-from the tournaments page's form and follows it to its results.
+"""The tournament pages in a real browser: Debian's chromium (driven by Playwright) launches a tiny round robin from
+the tournaments page's form and follows it to its results.
 
-Through the real server (no 3D view, one tournament worker, a temporary database). Screenshots go to
-``test-artifacts/`` and, for the README, ``docs/screenshots/tournament.png``. Skipped only when no chromium binary
-is installed.
+Through the real server (no 3D view, one tournament worker, a temporary database). Screenshots go to ``test-
+artifacts/`` and, under ``make screenshots``, ``docs/screenshots/tournament.png``. Skipped only when no chromium
+binary is installed.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import httpx
 import pytest
-from support.browser import ARTIFACTS, CHROMIUM_ARGS, chromium_binary, readme_screenshot, requires_chromium
+from support.browser import ARTIFACTS, PAGE_2D, browser_page, readme_screenshot, requires_chromium
 from support.live_server import LiveServer, server_settings
 
 if TYPE_CHECKING:
@@ -150,27 +150,15 @@ def test_tournament_pages_in_a_real_browser(tournament_server: str) -> None:
     tiny round robin (Fixed-LQNG vs the lane follower, one lap on the oval, 2 races); its page follows the
     progress to the end, shows the win matrix and the plots, and links each race to its result and replay; the
     leaderboard counts the races. No request may leave the machine."""
-    from playwright.sync_api import sync_playwright
-
     base = tournament_server
     ARTIFACTS.mkdir(exist_ok=True)
     outside: list[str] = []
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=chromium_binary(), args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page(viewport={"width": 1280, "height": 900})
-            page.on(
-                "request",
-                lambda r: outside.append(r.url) if not r.url.startswith(("http://127.0.0.1", "data:")) else None,
-            )
-            page.set_default_timeout(60_000)
-            _launch_from_the_form(page, base)
-            seen = _follow_the_progress(page)
-            assert "2 / 2 races" in seen and any(text.startswith(("0 / 2", "1 / 2")) for text in seen), seen
-            _check_the_results(page, base)
-            _follow_a_race_link(page, base)
-            _check_the_list_and_the_leaderboard(page, base)
-            _an_unknown_tournament_is_said_so(page, base)
-        finally:
-            browser.close()
+    with browser_page(PAGE_2D, outside=outside) as page:
+        _launch_from_the_form(page, base)
+        seen = _follow_the_progress(page)
+        assert "2 / 2 races" in seen and any(text.startswith(("0 / 2", "1 / 2")) for text in seen), seen
+        _check_the_results(page, base)
+        _follow_a_race_link(page, base)
+        _check_the_list_and_the_leaderboard(page, base)
+        _an_unknown_tournament_is_said_so(page, base)
     assert not outside, f"requests left the machine: {outside[:5]}"

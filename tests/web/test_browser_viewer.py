@@ -1,11 +1,11 @@
-"""The live race viewer in a real browser: Debian's chromium (driven by Playwright) opens the start page and a
-live race's viewer.
+"""The live race viewer in a real browser: Debian's chromium (driven by Playwright) opens the start page and a live
+race's viewer.
 
-Through the real server (``server.app.create_app`` under uvicorn, a temporary database): ``POST /api/races``
-(MCTS-LQNG vs Fixed-LQNG on the oval), then the start page must list the race, and the viewer must connect, show
-both karts moving and the green waypoint boxes of the planners, and its "Follow" dropdown must make the camera
-chase a kart. No request may leave the machine. Screenshots go to ``test-artifacts/`` (``viewer.png``,
-``viewer-follow.png``, ``start.png``) and, for the README, ``docs/screenshots/``. Skipped only when no chromium
+Through the real server (``server.app.create_app`` under uvicorn, a temporary database): ``POST /api/races`` (MCTS-
+LQNG vs Fixed-LQNG on the oval), then the start page must list the race, and the viewer must connect, show both
+karts moving and the green waypoint boxes of the planners, and its "Follow" dropdown must make the camera chase a
+kart. No request may leave the machine. Screenshots go to ``test-artifacts/`` (``viewer.png``, ``viewer-
+follow.png``, ``start.png``) and, under ``make screenshots``, ``docs/screenshots/``. Skipped only when no chromium
 binary is installed (``scripts/install_browser.sh`` installs Debian's; ``playwright install`` needs the internet).
 """
 
@@ -18,11 +18,11 @@ from collections.abc import Iterator
 import httpx
 import pytest
 from support.browser import (
-    ARTIFACTS,
     CAMERA_NEAR_KART0,
-    CHROMIUM_ARGS,
     NODE_POSITION,
-    chromium_binary,
+    PAGE_2D,
+    VIEW_3D,
+    browser_page,
     readme_screenshot,
     requires_chromium,
 )
@@ -60,72 +60,55 @@ ANY_WAYPOINT_VISIBLE = """() => {
 
 
 def test_viewer_in_a_real_browser(live_race: tuple[str, str]) -> None:
-    from playwright.sync_api import sync_playwright
-
     base, race_id = live_race
-    ARTIFACTS.mkdir(exist_ok=True)
     outside: list[str] = []
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=chromium_binary(), args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page(viewport={"width": 1280, "height": 720})
-            page.on(
-                "request",
-                lambda r: (
-                    outside.append(r.url)
-                    if not r.url.startswith(("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:"))
-                    else None
-                ),
-            )
-            page.set_default_timeout(60_000)
+    with browser_page(PAGE_2D, outside=outside) as page:
+        # the start page lists the race with a link to its viewer
+        page.goto(f"{base}/")
+        row = page.locator(f'tr[data-race-id="{race_id}"]')
+        row.wait_for()
+        assert "oval" in row.inner_text()
+        assert row.locator(f'a[href="/races/{race_id}/viewer/"]').count() == 1
+        readme_screenshot(page, "start.png")
 
-            # the start page lists the race with a link to its viewer
-            page.goto(f"{base}/")
-            row = page.locator(f'tr[data-race-id="{race_id}"]')
-            row.wait_for()
-            assert "oval" in row.inner_text()
-            assert row.locator(f'a[href="/races/{race_id}/viewer/"]').count() == 1
-            readme_screenshot(page, "start.png")
+        # the viewer connects and shows the scene
+        page.set_viewport_size(VIEW_3D)
+        page.goto(f"{base}/races/{race_id}/viewer/")
+        page.wait_for_function("() => !document.body.innerText.includes('Connecting...')")
+        for name in ("/karts/kart0", "/karts/kart1", "/plans/kart0/wp0", "/track/lanes", "/track/checkpoints/cp0"):
+            page.wait_for_function("name => window.__viserMutable?.nodeRefFromName?.[name] != null", arg=name)
+        # labels are drawn in one batch (no three.js object of their own): look them up in the scene tree
+        assert page.evaluate("() => window.__viserSceneTree.getState()['/karts/kart1/label'] != null")
 
-            # the viewer connects and shows the scene
-            page.goto(f"{base}/races/{race_id}/viewer/")
-            page.wait_for_function("() => !document.body.innerText.includes('Connecting...')")
-            for name in ("/karts/kart0", "/karts/kart1", "/plans/kart0/wp0", "/track/lanes", "/track/checkpoints/cp0"):
-                page.wait_for_function("name => window.__viserMutable?.nodeRefFromName?.[name] != null", arg=name)
-            # labels are drawn in one batch (no three.js object of their own): look them up in the scene tree
-            assert page.evaluate("() => window.__viserSceneTree.getState()['/karts/kart1/label'] != null")
+        # karts move: wait for the start (a race may count down first), then two reads 0.5 s apart differ
+        start = [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)]
+        deadline = time.monotonic() + 60
+        while [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)] == start:
+            assert time.monotonic() < deadline, "karts never moved"
+            page.wait_for_timeout(250)
+        before = [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)]
+        page.wait_for_timeout(500)
+        after = [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)]
+        moved = [math.dist(a, b) for a, b in zip(before, after, strict=True)]
+        assert max(moved) > 0.5, f"karts did not move in 0.5 s: {moved}"
 
-            # karts move: wait for the start (a race may count down first), then two reads 0.5 s apart differ
-            start = [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)]
-            deadline = time.monotonic() + 60
-            while [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)] == start:
-                assert time.monotonic() < deadline, "karts never moved"
-                page.wait_for_timeout(250)
-            before = [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)]
-            page.wait_for_timeout(500)
-            after = [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)]
-            moved = [math.dist(a, b) for a, b in zip(before, after, strict=True)]
-            assert max(moved) > 0.5, f"karts did not move in 0.5 s: {moved}"
+        # the planners' waypoints show up as green boxes
+        page.wait_for_function(ANY_WAYPOINT_VISIBLE, timeout=90_000)
+        calls = page.evaluate("() => window.__viserTestpoints?.rendererInfo?.render?.calls ?? -1")
+        assert calls != 0, "the renderer draws nothing"
+        # the canvas is nearly transparent until the environment map is ready (slow with software WebGL)
+        page.wait_for_function("() => ['', '1'].includes(window.__viserMutable?.canvas?.style.opacity)")
+        # the README's pictures without viser's "software WebGL" notice (this machine has no GPU)
+        page.add_style_tag(content="[class*='Notification-root'] { display: none !important; }")
+        readme_screenshot(page, "viewer.png")
 
-            # the planners' waypoints show up as green boxes
-            page.wait_for_function(ANY_WAYPOINT_VISIBLE, timeout=90_000)
-            calls = page.evaluate("() => window.__viserTestpoints?.rendererInfo?.render?.calls ?? -1")
-            assert calls != 0, "the renderer draws nothing"
-            # the canvas is nearly transparent until the environment map is ready (slow with software WebGL)
-            page.wait_for_function("() => ['', '1'].includes(window.__viserMutable?.canvas?.style.opacity)")
-            # the README's pictures without viser's "software WebGL" notice (this machine has no GPU)
-            page.add_style_tag(content="[class*='Notification-root'] { display: none !important; }")
-            readme_screenshot(page, "viewer.png")
-
-            # a viewer's own "Follow" dropdown: its camera then chases the kart
-            page.get_by_role("combobox", name="Follow").click()
-            page.get_by_role("option", name="1: MCTS").click()
-            page.wait_for_function(CAMERA_NEAR_KART0)
-            cameras = [page.evaluate("() => window.__viserMutable.camera.position.toArray()")]
-            page.wait_for_timeout(500)
-            cameras.append(page.evaluate("() => window.__viserMutable.camera.position.toArray()"))
-            assert math.dist(*cameras) > 0.5, f"the follow camera stands still: {cameras}"
-            readme_screenshot(page, "viewer-follow.png")
-        finally:
-            browser.close()
+        # a viewer's own "Follow" dropdown: its camera then chases the kart
+        page.get_by_role("combobox", name="Follow").click()
+        page.get_by_role("option", name="1: MCTS").click()
+        page.wait_for_function(CAMERA_NEAR_KART0)
+        cameras = [page.evaluate("() => window.__viserMutable.camera.position.toArray()")]
+        page.wait_for_timeout(500)
+        cameras.append(page.evaluate("() => window.__viserMutable.camera.position.toArray()"))
+        assert math.dist(*cameras) > 0.5, f"the follow camera stands still: {cameras}"
+        readme_screenshot(page, "viewer-follow.png")
     assert not outside, f"requests left the machine: {outside[:5]}"

@@ -17,18 +17,15 @@ import math
 import re
 import threading
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
-from support.browser import CHROMIUM_ARGS, chromium_binary, requires_chromium
+from support.browser import ARTIFACTS, VIEW_3D, browser_page, requires_chromium
 from support.live_server import LiveServer, server_settings, start_race, wait_for
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
-ROOT = Path(__file__).resolve().parents[2]
-ARTIFACTS = ROOT / "test-artifacts"
 RACE = {
     "track": "oval",
     "laps": 1,
@@ -94,38 +91,22 @@ def positions(frame: dict[str, Any]) -> list[tuple[float, float]]:
 
 
 def test_a_person_drives_a_race_in_a_real_browser(live: LiveServer) -> None:
-    from playwright.sync_api import sync_playwright
-
     ARTIFACTS.mkdir(exist_ok=True)
     client = live.client()
     race = start_race(client, **RACE)
     telemetry = Telemetry(f"{live.ws_url}/api/races/{race['id']}/telemetry")
     outside: list[str] = []
     try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=chromium_binary(), args=CHROMIUM_ARGS)
-            try:
-                page = browser.new_page(viewport={"width": 1280, "height": 720})
-                page.on(
-                    "request",
-                    lambda r: (
-                        outside.append(r.url)
-                        if not r.url.startswith(("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:"))
-                        else None
-                    ),
-                )
-                page.set_default_timeout(90_000)
-                page.add_init_script(FAKE_GAMEPADS)
-                link = f"{live.url}{race['karts'][0]['drive_url']}"
-                page.goto(link)
+        with browser_page(VIEW_3D, timeout_s=90, outside=outside) as page:
+            page.add_init_script(FAKE_GAMEPADS)
+            link = f"{live.url}{race['karts'][0]['drive_url']}"
+            page.goto(link)
 
-                _the_race_counts_down_with_nothing_moving(page, telemetry)
-                _the_kart_answers_the_keyboard_and_the_view_chases_it(page, telemetry)
-                _a_gamepad_steers(page, telemetry)
-                _the_end_states_my_result(page, client, telemetry, race)
-                _race_again_starts_the_same_race(page, client, race, link)
-            finally:
-                browser.close()
+            _the_race_counts_down_with_nothing_moving(page, telemetry)
+            _the_kart_answers_the_keyboard_and_the_view_chases_it(page, telemetry)
+            _a_gamepad_steers(page, telemetry)
+            _the_end_states_my_result(page, client, telemetry, race)
+            _race_again_starts_the_same_race(page, client, race, link)
     finally:
         telemetry.close()
         client.close()
