@@ -17,14 +17,14 @@ from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures
 from controllers.base import Action, Controller, PlanningDriver, RaceContext
 from controllers.hierarchical import HierarchicalController
 from controllers.plan import Plan
-from controllers.race import RaceOutcome, RaceSpec, load_any_track, run_race
+from controllers.race import RaceOutcome, RaceSpec, batch_key, load_any_track, run_race, run_races
 from controllers.registry import make_agent, validate_parameters
 from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import MCTSPlanner
 from sim_core.observation import Observation
 from sim_core.world import KartResult, RaceResult
 
-__all__ = ["FinishedRace", "RaceJob", "RaceOutcome", "RaceSpec", "race_figures", "run_job", "run_race"]
+__all__ = ["FinishedRace", "RaceJob", "RaceOutcome", "RaceSpec", "race_figures", "run_job", "run_jobs", "run_race"]
 
 
 @dataclass(frozen=True)
@@ -125,14 +125,35 @@ def job_drivers(job: RaceJob) -> list[Controller]:
 
 
 def run_job(job: RaceJob, record: bool = True) -> FinishedRace:
-    """Run ``job`` (in whatever process calls it); ``record``: keep the replay."""
+    """Run ``job`` alone (in whatever process calls it); ``record``: keep the replay."""
     started = time.perf_counter()
+    outcome = run_race(job.spec(), record=record, drivers=job_drivers(job))
+    return _finished(job, outcome, time.perf_counter() - started)
+
+
+def run_jobs(jobs: Sequence[RaceJob], record: bool = True) -> list[FinishedRace]:
+    """Run ``jobs`` (in whatever process calls it) through the batched runner
+    (:func:`controllers.race.run_races`): jobs that share a :func:`~controllers.race.batch_key` advance together.
+    Each race's result is the one :func:`run_job` gives it; its ``wall_seconds`` is its batch's wall time shared
+    out evenly among the batch's races."""
+    groups: dict[object, list[RaceJob]] = {}
+    for job in jobs:
+        groups.setdefault(batch_key(job.spec()), []).append(job)
+    finished: dict[int, FinishedRace] = {}
+    for group in groups.values():
+        started = time.perf_counter()
+        outcomes = run_races([job.spec() for job in group], record=record, drivers=[job_drivers(j) for j in group])
+        share = (time.perf_counter() - started) / len(group)
+        for job, outcome in zip(group, outcomes, strict=True):
+            finished[job.index] = _finished(job, outcome, share)
+    return [finished[job.index] for job in jobs]
+
+
+def _finished(job: RaceJob, outcome: RaceOutcome, wall: float) -> FinishedRace:
     background = background_planner_settings() if job.background_planners else None
     manifest = race_manifest(job.spec(), job.background_planners, background)
-    outcome = run_race(job.spec(), record=record, drivers=job_drivers(job))
     laps = job.laps if job.laps is not None else load_any_track(job.track).laps
     replay = asdict(outcome.replay) if outcome.replay is not None else None
-    wall = time.perf_counter() - started
     return FinishedRace(job, outcome.result, laps, wall, replay, outcome.lap_times, manifest)
 
 

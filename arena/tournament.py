@@ -1,12 +1,13 @@
 """Round-robin tournaments: every pair of agents, on every track, ``races_per_pair`` races each, start lanes
 alternating between races (lanes 2 and 3, as the original), every race seeded from the tournament's seed.
 
-Races run in worker processes (``backend="process"``, the default; ``forkserver`` start method, safe with
-threads and numba), in this process (``"inline"``), or as tasks on a Ray cluster (``"ray"``,
-``ray.init(address=...)``; the optional ``tournament`` extra). Each finished race goes to a :class:`RaceStore` as
-it finishes, in this process (one writer); a tournament run again with the same id and store skips the races
-the store already holds, so an interrupted tournament resumes and ends with the same results as one run straight
-through (every race depends on its job only).
+Races run in chunks through the batched runner (:func:`arena.race.run_jobs`: a chunk's races of one track advance
+together in one world), in worker processes (``backend="process"``, the default; ``forkserver`` start method, safe
+with threads and numba), in this process (``"inline"``), or as tasks on a Ray cluster (``"ray"``,
+``ray.init(address=...)``; the optional ``tournament`` extra), a chunk per task. Each finished race goes to a
+:class:`RaceStore` as it finishes, in this process (one writer); a tournament run again with the same id and store
+skips the races the store already holds, so an interrupted tournament resumes and ends with the same results as one
+run straight through (every race depends on its job only).
 """
 
 from __future__ import annotations
@@ -26,9 +27,9 @@ import numpy as np
 
 from arena.lifeline import die_with_parent
 from arena.manifest import Manifest, build_manifest, describe_agent, time_limit_of
-from arena.race import FinishedRace, RaceJob, background_planner_settings, run_job
+from arena.race import FinishedRace, RaceJob, background_planner_settings, run_jobs
 from arena.records import RaceFigures
-from controllers.race import MAX_START_SPREAD, load_any_track
+from controllers.race import MAX_START_SPREAD, batch_key, load_any_track
 from controllers.registry import controller_names, parse_agent, validate_agent
 
 log = logging.getLogger(__name__)
@@ -36,6 +37,7 @@ log = logging.getLogger(__name__)
 Backend = Literal["process", "inline", "ray"]
 BACKENDS: tuple[Backend, ...] = ("process", "inline", "ray")
 START_LANES = (2, 3)  # the original's two start lanes, swapped every other race
+BATCH_RACES = 8  # races per chunk at most: a chunk's races of one track advance together in one world
 
 
 @dataclass(frozen=True)
@@ -230,17 +232,20 @@ def run_tournament(
     record: bool = True,
     on_progress: ProgressHook | None = None,
     should_stop: StopCheck | None = None,
+    batch: int = BATCH_RACES,
 ) -> int:
-    """Run the races of ``spec`` that ``store`` does not hold yet; store each as it finishes. Returns the races
-    stored by this call. ``should_stop()`` is asked after every race: true ends the run (races in flight are
-    abandoned, not stored; a later run re-runs them)."""
+    """Run the races of ``spec`` that ``store`` does not hold yet, in chunks of at most ``batch`` races
+    (:func:`chunks`); store each race as its chunk finishes. Returns the races stored by this call.
+    ``should_stop()`` is asked after every race: true ends the run (races in flight are abandoned, not stored;
+    a later run re-runs them). The results do not depend on ``batch`` (:func:`arena.race.run_jobs`)."""
     spec.validate()
     done = store.finished_indices(tournament_id)
     pending = [job for job in spec.jobs() if job.index not in done]
     stored = 0
     if on_progress is not None:
         on_progress(Progress(len(done), spec.total, None))
-    races = _backend_races(backend, pending, workers or default_workers(), ray_address, record)
+    n_workers = workers or default_workers()
+    races = _backend_races(backend, chunks(pending, batch, n_workers), n_workers, ray_address, record)
     try:
         for race in races:
             store.save(tournament_id, race)
@@ -254,11 +259,24 @@ def run_tournament(
     return stored
 
 
+def chunks(jobs: Sequence[RaceJob], batch: int, workers: int = 1) -> list[tuple[RaceJob, ...]]:
+    """``jobs`` cut into chunks of at most ``batch`` races that share a batch key (track, laps, ...:
+    :func:`controllers.race.batch_key`), in schedule order; smaller chunks when there are too few races to keep
+    ``workers`` busy."""
+    if batch < 1:
+        raise ValueError(f"batch must be >= 1, got {batch}")
+    groups: dict[object, list[RaceJob]] = {}
+    for job in jobs:
+        groups.setdefault(batch_key(job.spec()), []).append(job)
+    size = max(1, min(batch, -(-len(jobs) // max(1, workers))))
+    return [tuple(group[i : i + size]) for group in groups.values() for i in range(0, len(group), size)]
+
+
 def _backend_races(
-    backend: Backend, jobs: Sequence[RaceJob], workers: int, ray_address: str | None, record: bool
+    backend: Backend, jobs: Sequence[tuple[RaceJob, ...]], workers: int, ray_address: str | None, record: bool
 ) -> Generator[FinishedRace, None, None]:
     if backend == "inline":
-        return (run_job(job, record) for job in jobs)
+        return (race for chunk in jobs for race in run_jobs(chunk, record))
     if backend == "process":
         return _process_races(jobs, workers, record)
     if backend == "ray":
@@ -270,11 +288,11 @@ def _start_method() -> str:
     return "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
 
 
-MAX_RACE_ATTEMPTS = 3  # a race whose worker process dies is run again, up to this many runs in all
+MAX_RACE_ATTEMPTS = 3  # a chunk whose worker process dies is run again, up to this many runs in all
 
 
 class WorkerLostError(RuntimeError):
-    """A race's worker process died in each of its :data:`MAX_RACE_ATTEMPTS` runs."""
+    """A chunk's worker process died in each of its :data:`MAX_RACE_ATTEMPTS` runs."""
 
 
 def _worker_pool(context: BaseContext) -> ProcessPoolExecutor:
@@ -282,56 +300,62 @@ def _worker_pool(context: BaseContext) -> ProcessPoolExecutor:
     return ProcessPoolExecutor(max_workers=1, mp_context=context, initializer=die_with_parent)  # type: ignore[arg-type]
 
 
-def _process_races(jobs: Sequence[RaceJob], workers: int, record: bool) -> Generator[FinishedRace, None, None]:
-    """Races from ``workers`` worker processes, one race each at a time, as they finish. A worker that dies loses
-    its current race only: that race runs again in a fresh worker (at most :data:`MAX_RACE_ATTEMPTS` runs)."""
+def _process_races(
+    jobs: Sequence[tuple[RaceJob, ...]], workers: int, record: bool
+) -> Generator[FinishedRace, None, None]:
+    """Races from ``workers`` worker processes, one chunk each at a time, as their chunks finish. A worker that dies
+    loses its current chunk only: that chunk runs again in a fresh worker (at most :data:`MAX_RACE_ATTEMPTS`
+    runs)."""
     if not jobs:
         return
     context = multiprocessing.get_context(_start_method())
     queue = list(reversed(jobs))
-    runs: dict[int, int] = {}  # job index -> runs started
+    runs: dict[int, int] = {}  # first job index of a chunk -> runs started
     slots = [_worker_pool(context) for _ in range(min(workers, len(jobs)))]
-    running: dict[Future[FinishedRace], tuple[int, RaceJob]] = {}  # -> (slot, job)
+    running: dict[Future[list[FinishedRace]], tuple[int, tuple[RaceJob, ...]]] = {}  # -> (slot, chunk)
 
-    def lost(slot: int, job: RaceJob) -> None:
-        if runs[job.index] >= MAX_RACE_ATTEMPTS:
-            raise WorkerLostError(f"race {job.index}: its worker process died in all {runs[job.index]} runs")
-        log.warning("race %d: its worker process died; running it again", job.index)
+    def lost(slot: int, chunk: tuple[RaceJob, ...]) -> None:
+        indices = [job.index for job in chunk]
+        if runs[chunk[0].index] >= MAX_RACE_ATTEMPTS:
+            raise WorkerLostError(f"races {indices}: their worker process died in all {runs[chunk[0].index]} runs")
+        log.warning("races %s: their worker process died; running them again", indices)
         slots[slot].shutdown(wait=False, cancel_futures=True)
         slots[slot] = _worker_pool(context)
-        queue.append(job)
+        queue.append(chunk)
 
     try:
         while queue or running:
-            busy = {slot for slot, _job in running.values()}
+            busy = {slot for slot, _chunk in running.values()}
             for slot in range(len(slots)):
                 if queue and slot not in busy:
-                    job = queue.pop()
-                    runs[job.index] = runs.get(job.index, 0) + 1
+                    chunk = queue.pop()
+                    runs[chunk[0].index] = runs.get(chunk[0].index, 0) + 1
                     try:
-                        running[slots[slot].submit(run_job, job, record)] = (slot, job)
-                    except BrokenProcessPool:  # its worker died between races
-                        lost(slot, job)
+                        running[slots[slot].submit(run_jobs, chunk, record)] = (slot, chunk)
+                    except BrokenProcessPool:  # its worker died between chunks
+                        lost(slot, chunk)
             if not running:
                 continue
             finished, _pending = wait(running, return_when=FIRST_COMPLETED)
-            for future in sorted(finished, key=lambda f: running[f][1].index):
-                slot, job = running.pop(future)
+            for future in sorted(finished, key=lambda f: running[f][1][0].index):
+                slot, chunk = running.pop(future)
                 try:
-                    race = future.result()
+                    races = future.result()
                 except BrokenProcessPool:
-                    lost(slot, job)
+                    lost(slot, chunk)
                     continue
-                yield race
+                yield from races
     finally:
         # stopped early: do not wait for the races in flight
         for pool in slots:
             pool.shutdown(wait=not running, cancel_futures=True)
 
 
-def _ray_races(jobs: Sequence[RaceJob], address: str | None, record: bool) -> Generator[FinishedRace, None, None]:
-    """Races as Ray tasks (one CPU each), as they finish. Connects to ``address`` (``None``: a local Ray, or the
-    cluster of ``RAY_ADDRESS``) unless Ray is already initialised."""
+def _ray_races(
+    jobs: Sequence[tuple[RaceJob, ...]], address: str | None, record: bool
+) -> Generator[FinishedRace, None, None]:
+    """Races as Ray tasks (a chunk each, one CPU), as their chunks finish. Connects to ``address`` (``None``: a
+    local Ray, or the cluster of ``RAY_ADDRESS``) unless Ray is already initialised."""
     try:
         import ray
     except ImportError as exc:
@@ -340,13 +364,13 @@ def _ray_races(jobs: Sequence[RaceJob], address: str | None, record: bool) -> Ge
         return
     if not ray.is_initialized():
         ray.init(address=address, ignore_reinit_error=True, log_to_driver=False)
-    remote: Any = ray.remote(num_cpus=1)(run_job)
-    running = [remote.remote(job, record) for job in jobs]
+    remote: Any = ray.remote(num_cpus=1)(run_jobs)
+    running = [remote.remote(chunk, record) for chunk in jobs]
     try:
         while running:
             ready, running = ray.wait(running, num_returns=1)
             for ref in ready:
-                yield ray.get(ref)
+                yield from ray.get(ref)
     finally:
         for ref in running:
             ray.cancel(ref, force=True)

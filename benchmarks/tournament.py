@@ -1,33 +1,78 @@
 """Tournament throughput: a sample of the paper's grid (every pairing of the five agents on ``oval`` and
-``complex``, ``--races`` full-length races per pairing and track; start lanes alternating) run in worker
-processes as ``karting tournament run`` does, replays recorded; the 1,000-race grid (50 per pairing and track)
-projected from it.
+``complex``, ``--races`` full-length races per pairing and track; start lanes alternating) run in worker processes as
+``karting tournament run`` does, replays recorded, through the batched runner (chunks of ``--batch`` races) and,
+side by side in the same run, the per-race runner (chunks of one race); the 1,000-race grid projected from each.
 
-* ``races_per_minute``: races finished per wall minute in the sample;
-* ``realtime_factor``: simulated race-seconds per wall-second in the sample;
-* ``full_grid_minutes``: each pairing and track's mean race wall time (drivers built, race run, replay kept) x 50,
-  summed and divided among the workers: the grid's wall time on this machine when the workers stay busy.
+* ``full_grid_minutes``: the batched sample's wall time x (50 / ``--races``): the grid's wall time on this machine,
+  every pairing and track weighing alike (as in the grid); ``full_grid_minutes_per_race_runner`` the same for the
+  per-race runner, and ``batched_speedup`` their ratio;
+* ``races_per_minute``, ``realtime_factor`` (simulated race-seconds per wall-second): of the batched sample;
+* ``kart_steps_per_s_fixed_line``: kart-steps per wall-second per worker of a tournament of the fixed-line agents
+  alone (``fixed-lqng``, ``fixed-rl``, ``lane-follower``; batched), and ``..._realtime_per_core`` the same over
+  real time (50 kart-steps a second);
+* ``outside_kernels_share``: the share of a one-process profile of the batched sample's first chunk spent outside
+  the compiled kernels (numba's dispatchers: the search, the LQ game, the simulator) and the policy's matrix
+  products: Python glue, the part batching and compiling can still remove.
 
-Run from the repo root: ``.venv/bin/python benchmarks/tournament.py`` (about 2-3 minutes on 2 cores; ``--help``: the
-sample, and ``--laps`` / ``--time-limit`` for short races, which the projection then assumes too). The last line
-printed is one JSON object.
+Run from the repo root: ``.venv/bin/python benchmarks/tournament.py`` (about 10 minutes on 2 cores; ``--help``: the
+sample, ``--laps`` / ``--time-limit`` for short races, which the projection then assumes too). The last line printed
+is one JSON object.
 """
 
 from __future__ import annotations
 
+import cProfile
 import json
-import statistics
+import pstats
+import sys
 import time
-from collections import defaultdict
 
 import typer
 
-from arena.tournament import MemoryStore, TournamentSpec, default_workers, run_tournament
+from arena.race import run_jobs
+from arena.tournament import BATCH_RACES, MemoryStore, TournamentSpec, default_workers, run_tournament
 
 PAPER_AGENTS = "mcts-rl,e2e,fixed-rl,mcts-lqng,fixed-lqng"
+FIXED_LINE_AGENTS = ("fixed-lqng", "fixed-rl", "lane-follower")
 GRID_RACES_PER_PAIR = 50
+SIM_HZ = 50.0
 
 app = typer.Typer(add_completion=False)
+
+
+def _timed(spec: TournamentSpec, workers: int, batch: int) -> tuple[float, MemoryStore]:
+    store = MemoryStore()
+    started = time.perf_counter()
+    run_tournament(spec, store, "bench", backend="process", workers=workers, batch=batch)
+    return time.perf_counter() - started, store
+
+
+def kernel_sites() -> set[tuple[str, int, str]]:
+    """(file, line, name) of every numba kernel the project has loaded: how a profile names a call into one."""
+    from numba.core.dispatcher import Dispatcher
+
+    sites = set()
+    for module in list(sys.modules.values()):
+        if getattr(module, "__name__", "").startswith(("sim_core", "controllers")):
+            for value in vars(module).values():
+                if isinstance(value, Dispatcher):
+                    code = value.py_func.__code__
+                    sites.add((code.co_filename, code.co_firstlineno, code.co_name))
+    return sites
+
+
+def outside_kernels_share(spec: TournamentSpec, batch: int) -> float:
+    """The share of a profile of the first ``batch`` races (in this process, through the batched runner) spent
+    outside numba's compiled kernels (the search, the LQ game, the simulator, the RL observation and actions)."""
+    profile = cProfile.Profile()
+    profile.enable()
+    run_jobs(spec.jobs()[:batch], record=True)
+    profile.disable()
+    stats = pstats.Stats(profile).stats  # type: ignore[attr-defined]
+    sites = kernel_sites()
+    total = sum(entry[2] for entry in stats.values())
+    compiled = sum(entry[2] for site, entry in stats.items() if site in sites)
+    return 1.0 - compiled / total
 
 
 @app.command()
@@ -36,37 +81,45 @@ def main(
     tracks: str = typer.Option("oval,complex", help="tracks, comma separated"),
     races: int = typer.Option(1, min=1, help="races per pairing and track in the sample"),
     workers: int = typer.Option(0, min=0, help="worker processes (0: one per CPU)"),
+    batch: int = typer.Option(BATCH_RACES, min=1, help="races per chunk of the batched runner"),
     seed: int = typer.Option(0),
     laps: int | None = typer.Option(None, min=1, help="laps per race (default: each track's)"),
     time_limit: float | None = typer.Option(None, min=1.0, help="[s] per race (default: the rules' limit)"),
+    per_race: bool = typer.Option(True, help="also run the sample through the per-race runner, for the ratio"),
 ) -> None:
-    """Run the sample, print a line per pairing and track, then the JSON summary."""
+    """Run the sample (batched, then per race), the fixed-line tournament and the profile; print the JSON."""
     n_workers = workers or default_workers()
     spec = TournamentSpec(
         tuple(agents.split(",")), tuple(tracks.split(",")), races, seed, laps=laps, time_limit=time_limit
     ).validate()
-    store = MemoryStore()
-    started = time.perf_counter()
-    run_tournament(spec, store, "bench", backend="process", workers=n_workers)
-    wall = time.perf_counter() - started
+    wall, store = _timed(spec, n_workers, batch)
     finished = list(store.races["bench"].values())
-    per_cell: dict[tuple[str, tuple[str, ...]], list[float]] = defaultdict(list)
-    for race in finished:
-        per_cell[(race.job.track, race.job.agents)].append(race.wall_seconds)
-    for (track, pair), seconds in sorted(per_cell.items()):
-        print(f"{track:8s} {' vs '.join(pair):26s} {statistics.fmean(seconds):6.1f} s/race ({len(seconds)} raced)")
+    projection = GRID_RACES_PER_PAIR / races / 60.0
     simulated = sum(race.result.duration for race in finished)
-    grid_seconds = sum(statistics.fmean(s) * GRID_RACES_PER_PAIR for s in per_cell.values()) / n_workers
-    summary = {
+    summary: dict[str, object] = {
         "races": len(finished),
         "workers": n_workers,
+        "batch": batch,
         "wall_s": round(wall, 1),
         "races_per_minute": round(len(finished) / (wall / 60.0), 2),
         "realtime_factor": round(simulated / wall, 2),
-        "full_grid_minutes": round(grid_seconds / 60.0, 1),
-        "full_grid_races": len(per_cell) * GRID_RACES_PER_PAIR,
+        "full_grid_minutes": round(wall * projection, 1),
+        "full_grid_races": len(spec.tracks) * len(spec.pairs()) * GRID_RACES_PER_PAIR,
         "finished_share": round(sum(k.finished for r in finished for k in r.result.karts) / (2 * len(finished)), 3),
     }
+    print(f"batched runner: {len(finished)} races in {wall:.1f} s")
+    if per_race:
+        alone_wall, _ = _timed(spec, n_workers, 1)
+        print(f"per-race runner: {len(finished)} races in {alone_wall:.1f} s")
+        summary["full_grid_minutes_per_race_runner"] = round(alone_wall * projection, 1)
+        summary["batched_speedup"] = round(alone_wall / wall, 2)
+    fixed = TournamentSpec(FIXED_LINE_AGENTS, spec.tracks, races, seed, laps=laps, time_limit=time_limit)
+    fixed_wall, fixed_store = _timed(fixed, n_workers, batch)
+    kart_steps = sum(r.result.duration * SIM_HZ * len(r.job.agents) for r in fixed_store.races["bench"].values())
+    per_core = kart_steps / fixed_wall / n_workers
+    summary["kart_steps_per_s_fixed_line"] = round(per_core)
+    summary["kart_steps_per_s_fixed_line_realtime_per_core"] = round(per_core / SIM_HZ, 1)
+    summary["outside_kernels_share"] = round(outside_kernels_share(spec, min(batch, spec.total)), 3)
     print(json.dumps(summary))
 
 

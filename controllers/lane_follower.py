@@ -7,6 +7,7 @@ world, so it can drive thousands of races at once.
 
 from __future__ import annotations
 
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -135,16 +136,28 @@ class LaneFollowerController:
 
     def act(self, observation: Observation) -> Action:
         """Pure pursuit on its lane with a curvature-limited speed."""
+        return self.act_batch([self], [observation])[0]
+
+    def batch_key(self) -> Hashable:
+        """Lane followers of one track (the same object), kart and parameters decide in one call
+        (:class:`~controllers.race.BatchDriver`)."""
         assert self._follower is not None, "reset() first"
-        me = observation.me
-        if self._lateral != self._lateral:
-            self._lateral = me.lateral
-        steer, throttle = self._follower.act(
-            np.array([me.x, me.y]),
-            np.array(me.heading),
-            np.array(me.speed),
-            np.array(me.progress),
-            np.array(me.wear),
-            self._lateral,
+        return (id(self._follower.track), self._follower.kart, self.params)
+
+    def act_batch(self, drivers: Sequence[LaneFollowerController], observations: Sequence[Observation]) -> list[Action]:
+        """Every driver's pure pursuit in one vectorised :meth:`LaneFollower.act` (elementwise arithmetic: each
+        kart's inputs are the ones it gets alone, to the bit)."""
+        assert self._follower is not None, "reset() first"
+        mine = [o.me for o in observations]
+        for driver, me in zip(drivers, mine, strict=True):
+            if driver._lateral != driver._lateral:  # the first decision: keep the lane it starts in
+                driver._lateral = me.lateral
+        inputs = self._follower.act(
+            np.array([[me.x, me.y] for me in mine]),
+            np.array([me.heading for me in mine]),
+            np.array([me.speed for me in mine]),
+            np.array([me.progress for me in mine]),
+            np.array([me.wear for me in mine]),
+            np.array([driver._lateral for driver in drivers]),
         )
-        return Action(float(steer), float(throttle))
+        return [Action(float(steer), float(throttle)) for steer, throttle in inputs]

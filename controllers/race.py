@@ -1,18 +1,20 @@
-"""Headless races between registered controllers, faster than real time and deterministic for a seed."""
+"""Headless races between registered controllers, faster than real time and deterministic for a seed: one race
+(:func:`run_race`) or many advancing together in one batched world (:func:`run_races`)."""
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, replace
+from typing import Any, Protocol, cast, runtime_checkable
 
 import numpy as np
 
-from controllers.base import Controller, PlanningDriver, RaceContext
+from controllers.base import Action, Controller, PlanningDriver, RaceContext
 from controllers.registry import make_agent
 from controllers.replay import Replay, ReplayRecorder, apply_plan_targets
 from sim_core.laps import LapTimer
-from sim_core.observation import observe
+from sim_core.observation import Observation, observe
 from sim_core.params import DT, SimParams, kart_preset
 from sim_core.track import Track
 from sim_core.track_io import get_track, load_track
@@ -72,6 +74,7 @@ def load_any_track(name: str) -> Track:
 
 
 StepHook = Callable[[World, Sequence[Controller], int], None]
+RacesHook = Callable[[World, int, Sequence[Controller], int], None]  # (world, race, drivers, step)
 
 
 def run_race(
@@ -86,63 +89,212 @@ def run_race(
     ``on_step(world, drivers, step)`` is called after every simulation step (measurements, e.g.
     :class:`controllers.race_metrics.RaceMetrics`). ``drivers`` (one per kart, new) replaces building
     ``spec.controllers`` from the registry (a composed driver, e.g. a tournament's E2E with a background
-    planner for its Δr / Δv)."""
-    track = load_any_track(spec.track)
-    params = SimParams(kart=kart_preset(spec.kart_preset))
-    if spec.time_limit is not None:
-        params = replace(params, rules=replace(params.rules, time_limit=spec.time_limit))
-    n = len(spec.controllers)
-    world = World(track, 1, n, params, laps=spec.laps)
-    world.reset(start_lanes=spec.start_lanes)
-    if drivers is None:
-        drivers = [make_agent(name) for name in spec.controllers]
-    elif len(drivers) != n:
-        raise ValueError(f"{len(drivers)} drivers for {n} karts")
-    # each driver's planning capability, looked up once (a runtime Protocol check costs microseconds a call)
-    planning = [driver if isinstance(driver, PlanningDriver) else None for driver in drivers]
-    for k, driver in enumerate(drivers):
-        if (planner := planning[k]) is not None:
-            planner.plan_latency = spec.plan_latency
-        driver.reset(RaceContext(track, params.kart, k, n, world.lane_change_limit, spec.seed * 1000 + k))
-    recorder = ReplayRecorder(track.name, n) if record else None
-    if recorder is not None:
-        recorder.allocate(round(params.rules.time_limit / DT) + 1)
-    actions = np.zeros((1, n, 2))
-    delays = spec.start_delays()
-    hold = [max(1, round(1.0 / (DT * d.rate_hz))) for d in drivers]
-    applied = [0] * n
-    laps = LapTimer(n, track.n_checkpoints)
+    planner for its Δr / Δv). A batch of one of :func:`run_races`."""
+    hook: RacesHook | None = None
+    if on_step is not None:
+        step_hook = on_step
+
+        def hook(world: World, _race: int, race_drivers: Sequence[Controller], step: int) -> None:
+            step_hook(world, race_drivers, step)
+
+    return run_races([spec], record=record, on_step=hook, drivers=None if drivers is None else [drivers])[0]
+
+
+def batch_key(spec: RaceSpec) -> tuple[str, str, int | None, float | None, int]:
+    """What races must share to advance in one :class:`~sim_core.world.World`: track, kart, laps, time limit and
+    the number of karts (:func:`run_races`)."""
+    return (spec.track, spec.kart_preset, spec.laps, spec.time_limit, len(spec.controllers))
+
+
+def run_races(
+    specs: Sequence[RaceSpec],
+    *,
+    record: bool = False,
+    on_step: RacesHook | None = None,
+    drivers: Sequence[Sequence[Controller]] | None = None,
+) -> list[RaceOutcome]:
+    """Race ``specs`` together, each to its end, in one batched :class:`~sim_core.world.World`: every step,
+    each race's drivers that are due decide (:func:`decide`: drivers with a batch path, :class:`BatchDriver`,
+    together), then the world steps every unfinished race at once. A finished race leaves the batch; the others
+    go on. Each race's result is the one :func:`run_race` gives it alone: races share no state, and a batch path
+    must return what its drivers' own ``act`` would.
+
+    The specs must share :func:`batch_key` (``ValueError`` otherwise). ``drivers``: one list per race, as
+    :func:`run_race`'s. ``on_step(world, race, drivers, step)`` is called for each unfinished race after every
+    step. A race's ``wall_seconds`` is the time from the batch's start to its end."""
+    if not specs:
+        return []
+    keys = {batch_key(spec) for spec in specs}
+    if len(keys) > 1:
+        raise ValueError(f"races of one batch share track, kart preset, laps, time limit and karts; got {keys}")
+    first = specs[0]
+    track = load_any_track(first.track)
+    params = SimParams(kart=kart_preset(first.kart_preset))
+    if first.time_limit is not None:
+        params = replace(params, rules=replace(params.rules, time_limit=first.time_limit))
+    if drivers is not None and len(drivers) != len(specs):
+        raise ValueError(f"{len(drivers)} driver lists for {len(specs)} races")
+    world = World(track, len(specs), len(first.controllers), params, laps=first.laps)
+    races = [
+        _Race.start(b, spec, world, params, None if drivers is None else drivers[b], record)
+        for b, spec in enumerate(specs)
+    ]
+    actions = np.zeros((len(specs), world.n_karts, 2))
     t0 = time.perf_counter()
     step = 0
-    while not world.done[0]:
-        observations = observe(world, 0)
-        for k, driver in enumerate(drivers):
-            waiting = step * DT < delays[k]
-            launching = not waiting and (step - 1) * DT < delays[k]  # the first step after its delay: decide now
-            if (step % hold[k] == 0 or launching) and not observations[k].me.finished:
-                action = driver.act(observations[k])
-                actions[0, k] = (action.steer, action.throttle)
-                if (planner := planning[k]) is not None and planner.plans_applied != applied[k]:
-                    applied[k] = planner.plans_applied
-                    _show_plan(world, k, planner, recorder, step)
-            if waiting:
-                actions[0, k] = (0.0, 0.0)  # standing (negative throttle reverses); its driver plans all the same
+    running = races
+    while running:
+        due = [decision for race in running for decision in race.due_decisions(world, step)]
+        decided = decide([race.drivers[k] for race, k, _ in due], [o for _, _, o in due])
+        for (race, k, _), action in zip(due, decided, strict=True):
+            actions[race.index, k] = (action.steer, action.throttle)
+            race.after_act(world, k, step)
+        for race in running:
+            race.hold_waiting(actions, step)
         world.step(actions)
-        laps.observe(world)
-        if on_step is not None:
-            on_step(world, drivers, step)
-        if recorder is not None:
-            recorder.record(world, actions[0])
+        done = world.done
+        for race in running:
+            race.after_step(world, actions, step, on_step)
+            if done[race.index]:
+                race.wall = time.perf_counter() - t0
+        running = [race for race in running if not done[race.index]]
         step += 1
-    wall = time.perf_counter() - t0
-    replay = None if recorder is None else recorder.replay()
-    return RaceOutcome(spec, world.result(0), wall, replay, laps.all_lap_times(), delays)
+    return [race.outcome(world) for race in races]
 
 
-def _show_plan(world: World, kart: int, driver: PlanningDriver, recorder: ReplayRecorder | None, step: int) -> None:
+@runtime_checkable
+class BatchDriver(Protocol):
+    """A driver that can decide together with others: :func:`decide` groups the drivers due at a step by
+    :meth:`batch_key` and asks the first of each group to :meth:`act_batch` for all of them. The actions must be
+    the ones each driver's own ``act`` gives (a driver without this path simply acts alone)."""
+
+    def batch_key(self) -> Hashable:
+        """Drivers with equal keys (and of one class) decide in one :meth:`act_batch` call."""
+
+    def act_batch(self, drivers: Sequence[Any], observations: Sequence[Observation]) -> list[Action]:
+        """Each of ``drivers``' (this one's group, itself included) action for its observation."""
+
+
+def decide(drivers: Sequence[Controller], observations: Sequence[Observation]) -> list[Action]:
+    """Every driver's action for its observation: drivers with a batch path (:class:`BatchDriver`) grouped by
+    class and key, one call per group; the others one ``act`` each, in order."""
+    actions: list[Action | None] = [None] * len(drivers)
+    groups: dict[tuple[type, Hashable], list[int]] = {}
+    for i, driver in enumerate(drivers):
+        if isinstance(driver, BatchDriver):
+            groups.setdefault((type(driver), driver.batch_key()), []).append(i)
+        else:
+            actions[i] = driver.act(observations[i])
+    for members in groups.values():
+        lead = cast(BatchDriver, drivers[members[0]])
+        batch = lead.act_batch([drivers[i] for i in members], [observations[i] for i in members])
+        for i, action in zip(members, batch, strict=True):
+            actions[i] = action
+    return [action for action in actions if action is not None]
+
+
+@dataclass
+class _Race:
+    """One race of a batch: its spec, drivers and what is kept of it as it runs."""
+
+    index: int
+    spec: RaceSpec
+    drivers: Sequence[Controller]
+    planning: list[PlanningDriver | None]  # each driver's planning capability, looked up once
+    hold: list[int]  # steps between a driver's decisions
+    applied: list[int]  # plans applied so far, by kart
+    delays: tuple[float, ...]  # [s] launch delays
+    laps: LapTimer
+    recorder: ReplayRecorder | None
+    wall: float = 0.0
+
+    @classmethod
+    def start(
+        cls,
+        index: int,
+        spec: RaceSpec,
+        world: World,
+        params: SimParams,
+        drivers: Sequence[Controller] | None,
+        record: bool,
+    ) -> _Race:
+        """Put race ``index`` on its grid and reset its drivers (built from the registry unless given)."""
+        track, n = world.track, world.n_karts
+        world.reset(races=index, start_lanes=spec.start_lanes)
+        if drivers is None:
+            drivers = [make_agent(name) for name in spec.controllers]
+        elif len(drivers) != n:
+            raise ValueError(f"{len(drivers)} drivers for {n} karts")
+        # a runtime Protocol check costs microseconds a call: once per race
+        planning = [driver if isinstance(driver, PlanningDriver) else None for driver in drivers]
+        for k, driver in enumerate(drivers):
+            if (planner := planning[k]) is not None:
+                planner.plan_latency = spec.plan_latency
+            driver.reset(RaceContext(track, params.kart, k, n, world.lane_change_limit, spec.seed * 1000 + k))
+        recorder = ReplayRecorder(track.name, n) if record else None
+        if recorder is not None:
+            recorder.allocate(round(params.rules.time_limit / DT) + 1)
+        hold = [max(1, round(1.0 / (DT * d.rate_hz))) for d in drivers]
+        return cls(
+            index,
+            spec,
+            drivers,
+            planning,
+            hold,
+            [0] * n,
+            spec.start_delays(),
+            LapTimer(n, track.n_checkpoints),
+            recorder,
+        )
+
+    def due_decisions(self, world: World, step: int) -> list[tuple[_Race, int, Observation]]:
+        """(this race, kart, observation) of each unfinished kart whose driver decides at ``step``: every ``hold``
+        steps, and on its first step after its launch delay."""
+        observations = observe(world, self.index)
+        due = []
+        for k, observation in enumerate(observations):
+            delay = self.delays[k]
+            launching = step * DT >= delay and (step - 1) * DT < delay
+            if (step % self.hold[k] == 0 or launching) and not observation.me.finished:
+                due.append((self, k, observation))
+        return due
+
+    def hold_waiting(self, actions: np.ndarray, step: int) -> None:
+        """Karts still within their launch delay stand (negative throttle reverses); their drivers plan all the
+        same."""
+        for k, delay in enumerate(self.delays):
+            if step * DT < delay:
+                actions[self.index, k] = (0.0, 0.0)
+
+    def after_step(self, world: World, actions: np.ndarray, step: int, on_step: RacesHook | None) -> None:
+        """Note the step's laps, tell ``on_step`` and record the replay."""
+        self.laps.observe(world, self.index)
+        if on_step is not None:
+            on_step(world, self.index, self.drivers, step)
+        if self.recorder is not None:
+            self.recorder.record(world, actions[self.index], self.index)
+
+    def after_act(self, world: World, kart: int, step: int) -> None:
+        """Show a plan the driver has just applied (in the world, for views and metrics, and in the replay)."""
+        planner = self.planning[kart]
+        if planner is not None and planner.plans_applied != self.applied[kart]:
+            self.applied[kart] = planner.plans_applied
+            _show_plan(world, self.index, kart, planner, self.recorder, step)
+
+    def outcome(self, world: World) -> RaceOutcome:
+        """The finished race's outcome."""
+        replay = None if self.recorder is None else self.recorder.replay()
+        return RaceOutcome(
+            self.spec, world.result(self.index), self.wall, replay, self.laps.all_lap_times(), self.delays
+        )
+
+
+def _show_plan(
+    world: World, race: int, kart: int, driver: PlanningDriver, recorder: ReplayRecorder | None, step: int
+) -> None:
     """Put a newly applied plan's targets in the world (for views and metrics) and in the replay."""
     if driver.active_plan is None:
         return
-    apply_plan_targets(world, 0, kart, driver.active_plan)
+    apply_plan_targets(world, race, kart, driver.active_plan)
     if recorder is not None:
         recorder.plan(step, kart, driver.active_plan)

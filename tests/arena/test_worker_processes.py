@@ -24,8 +24,9 @@ from sim_core.track_io import TrackFormatError
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEC = TournamentSpec(
-    agents=("fixed-lqng", "lane-follower"), tracks=("oval",), races_per_pair=4, laps=1, time_limit=30.0, seed=11
+    agents=("fixed-lqng", "lane-follower"), tracks=("oval",), races_per_pair=6, laps=1, time_limit=30.0, seed=11
 )
+BATCH = 2  # races per chunk: 3 chunks for 2 workers, so one is still queued when the first is stored
 
 
 def pool_workers() -> list[psutil.Process]:
@@ -34,13 +35,13 @@ def pool_workers() -> list[psutil.Process]:
     return [p for p in descendants(os.getpid()) if p.ppid() in children and "forkserver" in " ".join(p.cmdline())]
 
 
-def test_a_worker_that_dies_loses_only_its_race_which_runs_again(caplog: pytest.LogCaptureFixture) -> None:
+def test_a_worker_that_dies_loses_only_its_chunk_which_runs_again(caplog: pytest.LogCaptureFixture) -> None:
     reference = MemoryStore()
     run_tournament(SPEC, reference, "t", backend="inline")
     killed: list[int] = []
 
     def kill_a_worker(progress: Progress) -> None:
-        if progress.done == 1 and not killed:  # the first race stored; the others are running or next
+        if progress.done == 1 and not killed:  # the first chunk stored; the others are running or next
             workers = pool_workers()
             assert workers, "no worker process found"
             workers[0].kill()
@@ -48,9 +49,9 @@ def test_a_worker_that_dies_loses_only_its_race_which_runs_again(caplog: pytest.
 
     store = MemoryStore()
     with caplog.at_level(logging.WARNING, logger="arena.tournament"):
-        stored = run_tournament(SPEC, store, "t", backend="process", workers=2, on_progress=kill_a_worker)
+        stored = run_tournament(SPEC, store, "t", backend="process", workers=2, on_progress=kill_a_worker, batch=BATCH)
     assert killed and stored == SPEC.total
-    assert "its worker process died; running it again" in caplog.text
+    assert "their worker process died; running them again" in caplog.text
     assert [r.index for r in store.figures("t")] == list(range(SPEC.total))
     ours = [(r.index, r.karts, r.duration) for r in store.figures("t")]
     assert ours == [(r.index, r.karts, r.duration) for r in reference.figures("t")]
@@ -60,7 +61,7 @@ def test_a_race_that_fails_in_its_worker_reports_its_own_error() -> None:
     # not "its worker process died": the error is sent back whole (it must pickle) and ends the run at once
     job = RaceJob(index=0, track="no/such/track.json", agents=("lane-follower",), seed=0, start_lanes=(2,))
     with pytest.raises(TrackFormatError, match=r"^no/such/track\.json: "):
-        list(_process_races([job], workers=1, record=False))
+        list(_process_races([(job,)], workers=1, record=False))
 
 
 def test_no_worker_outlives_a_killed_runner(tmp_path: Path) -> None:

@@ -47,8 +47,16 @@ TINY: dict[str, tuple[list[str], set[str]]] = {
         {"ticks", "tick_jitter_p99_ms", "memory_growth_pct", "errors", "errors_total"},
     ),
     "tournament.py": (
-        ["--agents", "fixed-lqng,lane-follower", "--tracks", "oval", "--workers", "1", "--laps", "1"],
-        {"races", "races_per_minute", "realtime_factor", "full_grid_minutes", "finished_share"},
+        ["--agents", "fixed-lqng,lane-follower", "--tracks", "oval", "--workers", "1", "--time-limit", "4"],
+        {
+            "races",
+            "realtime_factor",
+            "full_grid_minutes",
+            "full_grid_minutes_per_race_runner",
+            "batched_speedup",
+            "kart_steps_per_s_fixed_line",
+            "outside_kernels_share",
+        },
     ),
     "training.py": (
         ["--steps", "512", "--warm-steps", "256", "--races", "4", "--buffer", "256", "--batch", "64"],

@@ -71,11 +71,10 @@ def _replay_plays_pauses_and_scrubs(page: Page, base: str, race_id: str) -> None
     while _kart_positions(page) == grid:
         assert time.monotonic() < deadline, "the replay never started"
         page.wait_for_timeout(100)
-    before = _kart_positions(page)
-    page.wait_for_timeout(500)
-    after = _kart_positions(page)
-    moved = [math.dist(a, b) for a, b in zip(before, after, strict=True)]
-    assert max(moved) > 0.5, f"karts did not move in 0.5 s of replay: {moved}"
+    before, deadline = _kart_positions(page), time.monotonic() + 10  # a loaded machine draws in bursts
+    while max(math.dist(a, b) for a, b in zip(before, _kart_positions(page), strict=True)) <= 0.5:
+        assert time.monotonic() < deadline, "the replay stopped"
+        page.wait_for_timeout(250)
     readme_screenshot(page, "replay.png")
 
     page.get_by_role("button", name="Pause").click()

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 import httpx
 import pytest
@@ -27,6 +28,9 @@ from support.browser import (
     requires_chromium,
 )
 from support.live_server import ServerThread
+
+if TYPE_CHECKING:
+    from playwright.sync_api import Page
 
 pytestmark = [requires_chromium, pytest.mark.slow]
 
@@ -59,6 +63,13 @@ ANY_WAYPOINT_VISIBLE = """() => {
 }"""
 
 
+CAMERA_POSITION = "() => window.__viserMutable.camera.position.toArray()"
+
+
+def _positions(page: Page) -> list[list[float]]:
+    return [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)]
+
+
 def test_viewer_in_a_real_browser(live_race: tuple[str, str]) -> None:
     base, race_id = live_race
     outside: list[str] = []
@@ -86,11 +97,11 @@ def test_viewer_in_a_real_browser(live_race: tuple[str, str]) -> None:
         while [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)] == start:
             assert time.monotonic() < deadline, "karts never moved"
             page.wait_for_timeout(250)
-        before = [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)]
-        page.wait_for_timeout(500)
-        after = [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)]
-        moved = [math.dist(a, b) for a, b in zip(before, after, strict=True)]
-        assert max(moved) > 0.5, f"karts did not move in 0.5 s: {moved}"
+        # and go on moving (a loaded machine delivers the view's frames in bursts: up to 10 s for half a metre)
+        before, deadline = [page.evaluate(NODE_POSITION, f"/karts/kart{k}") for k in range(2)], time.monotonic() + 10
+        while max(math.dist(a, b) for a, b in zip(before, _positions(page), strict=True)) <= 0.5:
+            assert time.monotonic() < deadline, "karts stopped moving"
+            page.wait_for_timeout(250)
 
         # the planners' waypoints show up as green boxes
         page.wait_for_function(ANY_WAYPOINT_VISIBLE, timeout=90_000)
@@ -106,9 +117,9 @@ def test_viewer_in_a_real_browser(live_race: tuple[str, str]) -> None:
         page.get_by_role("combobox", name="Follow").click()
         page.get_by_role("option", name="1: MCTS").click()
         page.wait_for_function(CAMERA_NEAR_KART0)
-        cameras = [page.evaluate("() => window.__viserMutable.camera.position.toArray()")]
-        page.wait_for_timeout(500)
-        cameras.append(page.evaluate("() => window.__viserMutable.camera.position.toArray()"))
-        assert math.dist(*cameras) > 0.5, f"the follow camera stands still: {cameras}"
+        camera, deadline = page.evaluate(CAMERA_POSITION), time.monotonic() + 10
+        while math.dist(camera, page.evaluate(CAMERA_POSITION)) <= 0.5:
+            assert time.monotonic() < deadline, "the follow camera stands still"
+            page.wait_for_timeout(250)
         readme_screenshot(page, "viewer-follow.png")
     assert not outside, f"requests left the machine: {outside[:5]}"
