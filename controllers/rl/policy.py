@@ -115,9 +115,11 @@ def _load(folder: str) -> Policy:
         )
     with np.load(path, allow_pickle=False) as data:
         n = int(data["n_layers"])
+        # stored in float32, held in float64: numpy would cast them on every product anyway (the same numbers,
+        # so the same results, without a copy of every layer per decision)
         return Policy(
-            tuple(data[f"w{i}"] for i in range(n)),
-            tuple(data[f"b{i}"] for i in range(n)),
+            tuple(data[f"w{i}"].astype(np.float64) for i in range(n)),
+            tuple(data[f"b{i}"].astype(np.float64) for i in range(n)),
             data["obs_mean"],
             data["obs_var"],
             float(data["clip_obs"]),
