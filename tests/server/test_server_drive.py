@@ -227,10 +227,14 @@ def test_a_silent_driver_brakes_to_a_stop_without_reversing(
         driver.drive(0.0, 1.0, 1.5)
         fast = driver.kart["speed"]
         assert fast > 4.0 and not driver.states[-1]["braking"]
+        silent_from = len(driver.states)
         driver.drain(DRIVE_TIMEOUT_S + 0.2)  # silence
-        assert driver.states[-1]["braking"]
-        assert driver.kart["speed"] < fast
-        driver.drain(fast / 6.0 + 0.5)  # the paper kart brakes at 6 m/s^2
+        # the states read may lag the race on a loaded machine: judge from the first one that brakes
+        driver.until(lambda: driver.states[-1]["braking"], 10)
+        onset = next(i for i in range(silent_from, len(driver.states)) if driver.states[i]["braking"])
+        assert driver.states[onset]["kart"]["speed"] >= 0.5 * fast  # it was still going when the brakes came on
+        driver.drain(fast / 6.0 + 1.0)  # the paper kart brakes at 6 m/s^2
+        assert driver.kart["speed"] < driver.states[onset]["kart"]["speed"]
     speeds = [s["kart"]["speed"] for s in driver.states[-10:]]
     assert all(-0.05 <= v < 0.2 for v in speeds), speeds
     assert client.get(f"/api/races/{race['id']}").json()["drivers"][0]["braking"]
