@@ -182,7 +182,7 @@ def decide(drivers: Sequence[Controller], observations: Sequence[Observation]) -
     groups: dict[tuple[type, Hashable], list[int]] = {}
     for i, driver in enumerate(drivers):
         if _has_batch_path(type(driver)):
-            groups.setdefault((type(driver), driver.batch_key()), []).append(i)
+            groups.setdefault((type(driver), cast(BatchDriver, driver).batch_key()), []).append(i)
         else:
             actions[i] = driver.act(observations[i])
     for members in groups.values():
