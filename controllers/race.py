@@ -6,6 +6,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, replace
+from functools import cache
 from typing import Any, Protocol, cast, runtime_checkable
 
 import numpy as np
@@ -193,16 +194,11 @@ def decide(drivers: Sequence[Controller], observations: Sequence[Observation]) -
     return [action for action in actions if action is not None]
 
 
-_BATCH_PATHS: dict[type, bool] = {}
-
-
+@cache
 def _has_batch_path(kind: type) -> bool:
     """Whether drivers of class ``kind`` are :class:`BatchDriver` s, checked once per class (a runtime Protocol
     check costs tens of microseconds: every step it was a tenth of a race's time)."""
-    known = _BATCH_PATHS.get(kind)
-    if known is None:
-        known = _BATCH_PATHS[kind] = all(callable(getattr(kind, name, None)) for name in ("batch_key", "act_batch"))
-    return known
+    return all(callable(getattr(kind, name, None)) for name in ("batch_key", "act_batch"))
 
 
 @dataclass
