@@ -153,7 +153,7 @@ def _finished(job: RaceJob, outcome: RaceOutcome, wall: float) -> FinishedRace:
     background = background_planner_settings() if job.background_planners else None
     manifest = race_manifest(job.spec(), job.background_planners, background)
     laps = job.laps if job.laps is not None else load_any_track(job.track).laps
-    replay = asdict(outcome.replay) if outcome.replay is not None else None
+    replay = outcome.replay.as_dict() if outcome.replay is not None else None
     return FinishedRace(job, outcome.result, laps, wall, replay, outcome.lap_times, manifest)
 
 

@@ -28,9 +28,14 @@ class Replay:
     )  # [step][kart] = [x, y, heading, speed, steer, throttle]
     plans: list[dict[str, object]] = field(default_factory=list)
 
+    def as_dict(self) -> dict[str, object]:
+        """The replay as plain data, sharing this replay's lists (``dataclasses.asdict`` would deep-copy every pose
+        value: half a second for a race's 4,000 steps)."""
+        return {"track": self.track, "dt": self.dt, "poses": self.poses, "plans": self.plans}
+
     def save(self, path: str | Path) -> None:
         """Write the replay as JSON."""
-        Path(path).write_text(json.dumps(asdict(self)))
+        Path(path).write_text(json.dumps(self.as_dict()))
 
 
 class ReplayRecorder:

@@ -42,6 +42,18 @@ def most_probable_pedal(mean: np.ndarray, std: np.ndarray) -> np.ndarray:
     return np.select([(brake > coast) & (brake > accelerate), accelerate > coast], [-1.0, 1.0], default=0.0)
 
 
+def most_probable_pedal_of(mean: float, std: float) -> float:
+    """:func:`most_probable_pedal` of one Gaussian, the same arithmetic on floats (a decision of one kart costs
+    a microsecond here where the array functions' calls cost fifty)."""
+    sigma = max(std, 1e-9)
+    brake = float(ndtr((-1.0 / 3.0 - mean) / sigma))
+    accelerate = 1.0 - float(ndtr((1.0 / 3.0 - mean) / sigma))
+    coast = 1.0 - brake - accelerate
+    if brake > coast and brake > accelerate:
+        return -1.0
+    return 1.0 if accelerate > coast else 0.0
+
+
 def branch_acceleration(kart: KartParams, speed: np.ndarray, branch: np.ndarray) -> np.ndarray:
     """[m/s^2] the longitudinal acceleration each branch asks of the kart at ``speed``."""
     ratio = np.minimum(np.abs(np.asarray(speed, dtype=float)) / kart.top_speed, 1.0)

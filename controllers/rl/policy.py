@@ -11,12 +11,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from pathlib import Path
 
 import numpy as np
 
-from controllers.rl.actions import most_probable_pedal
+from controllers.rl.actions import most_probable_pedal_of
 
 POLICY_FILE = "policy.npz"
 WEIGHTS_ROOT = Path(__file__).resolve().parent / "weights"
@@ -50,8 +50,17 @@ class Policy:
 
     def normalise(self, obs: np.ndarray) -> np.ndarray:
         """The trainer's observation normalisation (running mean and variance, clipped)."""
-        z = (obs - self.obs_mean) / np.sqrt(self.obs_var + NORM_EPSILON)
+        z = (obs - self.obs_mean) / self._obs_scale
         return np.clip(z, -self.clip_obs, self.clip_obs)
+
+    @cached_property
+    def _obs_scale(self) -> np.ndarray:
+        return np.sqrt(self.obs_var + NORM_EPSILON)
+
+    @cached_property
+    def _std(self) -> tuple[float, float]:
+        steer, pedal = np.exp(self.log_std)
+        return float(steer), float(pedal)
 
     def act(self, obs: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
         """(2,) ``[steer, pedal]`` in [-1, 1] for one raw observation (D,): a sample from the Gaussian with
@@ -59,9 +68,8 @@ class Policy:
         likely picks (:func:`controllers.rl.actions.most_probable_pedal`)."""
         if rng is not None:
             return self.sample(obs, rng)
-        mean = self.mean(obs)
-        std = np.exp(self.log_std)
-        return np.array([np.clip(mean[0], -1.0, 1.0), most_probable_pedal(mean[1], std[1])])
+        steer, pedal = self.mean(obs).tolist()
+        return np.array([min(max(steer, -1.0), 1.0), most_probable_pedal_of(pedal, self._std[1])])
 
     def mean(self, obs: np.ndarray) -> np.ndarray:
         """(2,) the action distribution's mean (unclipped); (n, 2) for a batch (n, D) of observations."""

@@ -20,6 +20,7 @@ What the live Observation does not carry is reconstructed here, the same way the
 
 from __future__ import annotations
 
+import bisect
 from collections.abc import Sequence
 from typing import cast
 
@@ -105,7 +106,7 @@ class RLTracker:
         self.kart: KartParams = context.kart
         self.tables = TrackTables.of(track)
         self.lane_offsets = np.ascontiguousarray(track.sample_lane_offsets(), dtype=np.float64)
-        self.centre_s = track.centre_s
+        self.centre_s = track.centre_s.tolist()  # bisect: np.searchsorted's call costs more for one point
         self.straight = track.straight_flags.astype(bool)
         self.racing_lane = racing_lane_at_checkpoints(track)
         n_cp = track.n_checkpoints
@@ -144,7 +145,8 @@ class RLTracker:
         me = observation.me
         inputs, branch = world_actions(self.kart, np.array([me.speed]), raw[None, :])
         self.accelerating[0, 0] = float(branch[0] == ACCELERATE)
-        self.action = Action(float(np.clip(inputs[0, 0], -1, 1)), float(np.clip(inputs[0, 1], -1, 1)))
+        steer, throttle = inputs[0].tolist()
+        self.action = Action(min(max(steer, -1.0), 1.0), min(max(throttle, -1.0), 1.0))
         for action_filter in self.filters:
             self.action = action_filter.apply(self.action, observation)
             if action_filter.took_over:  # a manoeuvre, not the policy's accelerator
@@ -196,7 +198,7 @@ class RLTracker:
 
     def _update_lane(self, k: int, s: float, d: float, passed: int, crossing_lane: int) -> None:
         """The referee's lane membership and eq. (10) counter, on this decision."""
-        row = int(np.clip(np.searchsorted(self.centre_s, s, side="right") - 1, 0, len(self.centre_s) - 1))
+        row = min(max(bisect.bisect_right(self.centre_s, s) - 1, 0), len(self.centre_s) - 1)
         if self.lane_now[k] < 1:
             first = lane_with_hysteresis(self.lane_offsets, row, d, 0, HYSTERESIS)
             self.lane_now[k] = crossing_lane if crossing_lane >= 1 else first
