@@ -140,9 +140,16 @@ def run_command(tournament_id: str, spec: Mapping[str, Any]) -> str:
     for option, key in (("--laps", "laps"), ("--time-limit", "time_limit")):
         if spec.get(key) is not None:
             args += [option, str(spec[key])]
-    if spec.get("start_spread"):
-        args += ["--start-spread", str(spec["start_spread"])]
+    args += ["--conditions", str(spec.get("conditions", "paper"))]
     return shlex.join(args)
+
+
+def _conditions(conditions: Mapping[str, Any]) -> str:
+    """The race conditions a manifest records, in words (stored before they were a named set: a launch spread)."""
+    drawn = conditions.get("conditions")
+    if not isinstance(drawn, Mapping):
+        return f"a launch spread of {conditions.get('start_spread', 0.0)} s"
+    return f"`{drawn.get('name')}` ({drawn.get('description') or json.dumps(drawn)})"
 
 
 def _what_was_run(tournament: Tournament, race_commits: Mapping[str, int]) -> list[str]:
@@ -163,7 +170,7 @@ def _what_was_run(tournament: Tournament, race_commits: Mapping[str, int]) -> li
         f"**Races:** {len(tournament.races)}, {c.get('races_per_pair')} per pair and track; laps: {laps}; time limit "
         f"{c.get('time_limit')} s.",
         f"**Starts:** the pair's first agent in lane {lanes.get('even_races', ['?'])[0]} in even races, lane "
-        f"{lanes.get('odd_races', ['?'])[0]} in odd ones; launch spread {c.get('start_spread')} s; seed "
+        f"{lanes.get('odd_races', ['?'])[0]} in odd ones; conditions {_conditions(c)}; seed "
         f"{c.get('seed')} (a race's seed: `{c.get('race_seeds')}`).",
         f"**Plans:** applied {c.get('plan_latency')} s after they are asked for. Δr and Δv of agents without a "
         f"planner ({planned}) are measured against an MCTS planner in the background with "

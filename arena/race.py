@@ -41,7 +41,7 @@ class RaceJob:
     kart_preset: str = "paper"
     plan_latency: float = 0.1  # [s]
     background_planners: tuple[str, ...] = ()  # agents given an MCTS planner in the background (Δr, Δv only)
-    start_spread: float = 0.0  # [s] launch delays drawn from the seed (:attr:`controllers.race.RaceSpec.start_spread`)
+    conditions: str = "paper"  # the race conditions' set (:mod:`sim_core.conditions`), drawn from the seed
 
     def spec(self) -> RaceSpec:
         """The headless race to run."""
@@ -54,7 +54,7 @@ class RaceJob:
             kart_preset=self.kart_preset,
             plan_latency=self.plan_latency,
             time_limit=self.time_limit,
-            start_spread=self.start_spread,
+            conditions=self.conditions,
         )
 
 
@@ -187,6 +187,7 @@ def race_figures(
         index=job.index,
         seed=job.seed,
         start_lanes=job.start_lanes,
+        conditions=job.conditions,
         duration=duration,
         race_id=race_id,
     )

@@ -50,6 +50,7 @@ class RaceFigures:
     index: int = 0  # position in its tournament's schedule (or in the log file)
     seed: int | None = None
     start_lanes: tuple[int, ...] | None = None
+    conditions: str | None = None  # the race conditions' set (None: not known, e.g. the original's logs)
     duration: float | None = None  # [s] simulated race time
     race_id: str | None = None  # where the race is stored (None: not stored)
     extra: Mapping[str, object] = field(default_factory=dict)

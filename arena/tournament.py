@@ -29,8 +29,9 @@ from arena.lifeline import die_with_parent
 from arena.manifest import Manifest, build_manifest, describe_agent, time_limit_of
 from arena.race import FinishedRace, RaceJob, background_planner_settings, run_jobs
 from arena.records import RaceFigures
-from controllers.race import MAX_START_SPREAD, batch_key, load_any_track
+from controllers.race import batch_key, load_any_track
 from controllers.registry import controller_names, parse_agent, validate_agent
+from sim_core.conditions import CONDITION_SETS, condition_set
 
 log = logging.getLogger(__name__)
 
@@ -38,6 +39,11 @@ Backend = Literal["process", "inline", "ray"]
 BACKENDS: tuple[Backend, ...] = ("process", "inline", "ray")
 START_LANES = (2, 3)  # the original's two start lanes, swapped every other race
 BATCH_RACES = 8  # races per chunk at most: a chunk's races of one track advance together in one world
+
+
+def race_seed(seed: int, track: int, race: int) -> int:
+    """The seed of race ``race`` of every pair on the ``track``-th track of a tournament seeded ``seed``."""
+    return int(np.random.SeedSequence([seed, track, race]).generate_state(1)[0] % 2**31)
 
 
 @dataclass(frozen=True)
@@ -56,9 +62,9 @@ class TournamentSpec:
     # controllers without a planner given the MCTS planner in the background for their Δr / Δv (as the paper's E2E),
     # by name: an agent with parameters (``e2e:deterministic=false``) gets one too
     background_planners: tuple[str, ...] = ("e2e",)
-    # [s] each kart launches after a delay drawn from its race's seed, uniform in [0, start_spread): races with a
-    # spread, which a start lane alone does not decide (0: the paper's simultaneous starts)
-    start_spread: float = 0.0
+    # the race conditions (sim_core.conditions.CONDITION_SETS), drawn from each race's seed: "varied" samples launch
+    # reactions, start wear and the drivers' imprecision; "paper" is the original's experiment
+    conditions: str = "varied"
 
     def problems(self) -> dict[str, str]:
         """What is wrong with this spec, by field (empty: nothing)."""
@@ -88,8 +94,8 @@ class TournamentSpec:
             found["tracks"] = f"unknown tracks {bad_tracks}" if bad_tracks else "give one or more tracks"
         if self.races_per_pair < 1:
             found["races_per_pair"] = f"races_per_pair must be >= 1, got {self.races_per_pair}"
-        if not 0.0 <= self.start_spread <= MAX_START_SPREAD:
-            found["start_spread"] = f"start_spread must be in [0, {MAX_START_SPREAD}] s, got {self.start_spread}"
+        if self.conditions not in CONDITION_SETS:
+            found["conditions"] = f"unknown conditions {self.conditions!r}; known: {sorted(CONDITION_SETS)}"
         return found
 
     def validate(self) -> TournamentSpec:
@@ -105,14 +111,15 @@ class TournamentSpec:
 
     def jobs(self) -> list[RaceJob]:
         """The schedule: per track, per pair, ``races_per_pair`` races; even races put the pair's first agent in
-        lane 2, odd ones in lane 3. Race seeds come from ``numpy.random.SeedSequence([seed, index])``."""
+        lane 2, odd ones in lane 3. A paired design: race ``r`` of every pair on a track has the same seed
+        (``numpy.random.SeedSequence([seed, track, r])``), so the same conditions."""
         jobs: list[RaceJob] = []
-        for track in self.tracks:
+        for t, track in enumerate(self.tracks):
+            seeds = [race_seed(self.seed, t, r) for r in range(self.races_per_pair)]
             for a, b in self.pairs():
-                for r in range(self.races_per_pair):
+                for r, seed in enumerate(seeds):
                     index = len(jobs)
                     lanes = START_LANES if r % 2 == 0 else START_LANES[::-1]
-                    seed = int(np.random.SeedSequence([self.seed, index]).generate_state(1)[0] % 2**31)
                     job = RaceJob(
                         index,
                         track,
@@ -124,7 +131,7 @@ class TournamentSpec:
                         self.kart_preset,
                         self.plan_latency,
                         tuple(agent for agent in (a, b) if parse_agent(agent)[0] in self.background_planners),
-                        self.start_spread,
+                        self.conditions,
                     )
                     jobs.append(job)
         return jobs
@@ -148,6 +155,9 @@ class TournamentSpec:
     def from_json(cls, data: Mapping[str, Any]) -> TournamentSpec:
         """Read back :meth:`to_json`."""
         values = {**data, "agents": tuple(data["agents"]), "tracks": tuple(data["tracks"])}
+        # stored before race conditions were a named set: a launch spread alone, simultaneous by default
+        values.pop("start_spread", None)
+        values.setdefault("conditions", "paper")
         if "background_planners" in values:
             values["background_planners"] = tuple(values["background_planners"])
         return cls(**values)
@@ -162,10 +172,11 @@ class TournamentSpec:
             "races": self.total,
             # the lanes of the pair's first and second agent, by the race's number in its pair and track
             "start_lanes": {"even_races": list(START_LANES), "odd_races": list(START_LANES[::-1])},
-            "start_spread": self.start_spread,
+            "conditions": condition_set(self.conditions).to_json(),
             "plan_latency": self.plan_latency,
             "seed": self.seed,
-            "race_seeds": "numpy.random.SeedSequence([seed, index]).generate_state(1)[0] % 2**31",
+            "race_seeds": "numpy.random.SeedSequence([seed, track, r]).generate_state(1)[0] % 2**31 for race r of "
+            "each pair on the track-th track (the same conditions for race r of every pair)",
             "time_limit": time_limit_of(self.time_limit),
             "background_planners": list(self.background_planners),
             "background_planner": background_planner_settings() if self.background_planners else None,

@@ -14,6 +14,8 @@ import numpy as np
 from controllers.base import Action, Controller, PlanningDriver, RaceContext
 from controllers.registry import make_agent
 from controllers.replay import Replay, ReplayRecorder, apply_plan_targets
+from sim_core import state as st
+from sim_core.conditions import ConditionSet, Imprecision, RaceConditions, condition_set
 from sim_core.laps import LapTimer
 from sim_core.observation import Observation, observe
 from sim_core.params import DT, SimParams, kart_preset
@@ -21,13 +23,11 @@ from sim_core.track import Track
 from sim_core.track_io import get_track, load_track
 from sim_core.world import RaceResult, World
 
-MAX_START_SPREAD = 2.0  # [s]
-START_SPREAD_STREAM = 0x57A27  # keeps the launch delays' random stream apart from any other use of the seed
-
 
 @dataclass(frozen=True)
 class RaceSpec:
-    """A headless race: which track, which drivers (by registered name), laps, seed and starting lanes."""
+    """A headless race: which track, which drivers (by registered name), laps, seed, starting lanes and the
+    conditions it is raced under (a named :class:`~sim_core.conditions.ConditionSet`, drawn from the seed)."""
 
     track: str = "oval"
     controllers: tuple[str, ...] = ("mcts-lqng", "fixed-lqng")
@@ -37,22 +37,20 @@ class RaceSpec:
     kart_preset: str = "paper"
     plan_latency: float = 0.1  # [s] simulated delay between requesting and applying a high-level plan
     time_limit: float | None = None  # [s] end the race then (None: the rules' limit)
-    # [s] each kart launches after a delay drawn from the seed, uniform in [0, start_spread) (a driver's reaction
-    # to the lights); 0: every kart launches at once, as in the paper's experiments
-    start_spread: float = 0.0
+    # a named set of sim_core.conditions.CONDITION_SETS ("paper": the original's, "varied"), or a set of one's own
+    conditions: str | ConditionSet = "paper"
 
     def __post_init__(self) -> None:
-        if not 0.0 <= self.start_spread <= MAX_START_SPREAD:
-            raise ValueError(f"start_spread must be in [0, {MAX_START_SPREAD}] s, got {self.start_spread}")
+        self.condition_set()  # a clear KeyError for an unknown set
 
-    def start_delays(self) -> tuple[float, ...]:
-        """Each kart's launch delay [s]: a function of the seed and the number of karts alone, so two series with
-        the same seeds and different drivers see the same starts (a paired comparison)."""
-        n = len(self.controllers)
-        if self.start_spread == 0.0:
-            return (0.0,) * n
-        rng = np.random.default_rng([self.seed, START_SPREAD_STREAM])
-        return tuple(float(d) for d in rng.uniform(0.0, self.start_spread, n))
+    def condition_set(self) -> ConditionSet:
+        """The set this race's conditions are drawn from."""
+        return self.conditions if isinstance(self.conditions, ConditionSet) else condition_set(self.conditions)
+
+    def drawn(self) -> RaceConditions:
+        """This race's conditions: a function of the seed, the number of karts and the start lanes alone, so two
+        series with the same seeds and different drivers meet the same conditions (a paired comparison)."""
+        return self.condition_set().draw(self.seed, len(self.controllers), self.start_lanes)
 
 
 @dataclass(frozen=True)
@@ -64,7 +62,12 @@ class RaceOutcome:
     wall_seconds: float
     replay: Replay | None
     lap_times: tuple[tuple[float, ...], ...] = ()  # [s] each kart's completed laps, by kart index
-    start_delays: tuple[float, ...] = ()  # [s] each kart's launch delay (:meth:`RaceSpec.start_delays`)
+    conditions: RaceConditions | None = None  # as drawn (:meth:`RaceSpec.drawn`)
+
+    @property
+    def start_delays(self) -> tuple[float, ...]:
+        """[s] each kart's launch delay."""
+        return self.conditions.launch_delays if self.conditions is not None else ()
 
 
 def load_any_track(name: str) -> Track:
@@ -152,10 +155,13 @@ def run_races(
             race.after_act(world, k, step)
         for race in running:
             race.hold_waiting(actions, step)
-        world.step(actions)
+        applied = actions.copy()
+        for race in running:
+            applied[race.index] = race.with_imprecision(world, actions[race.index], step)
+        world.step(applied)
         done = world.done
         for race in running:
-            race.after_step(world, actions, step, on_step)
+            race.after_step(world, applied, step, on_step)
             if done[race.index]:
                 race.wall = time.perf_counter() - t0
         running = [race for race in running if not done[race.index]]
@@ -211,7 +217,8 @@ class _Race:
     planning: list[PlanningDriver | None]  # each driver's planning capability, looked up once
     hold: list[int]  # steps between a driver's decisions
     applied: list[int]  # plans applied so far, by kart
-    delays: tuple[float, ...]  # [s] launch delays
+    conditions: RaceConditions
+    imprecision: Imprecision | None  # the drivers' hands (None: commands applied as given)
     laps: LapTimer
     recorder: ReplayRecorder | None
     wall: float = 0.0
@@ -228,7 +235,13 @@ class _Race:
     ) -> _Race:
         """Put race ``index`` on its grid and reset its drivers (built from the registry unless given)."""
         track, n = world.track, world.n_karts
-        world.reset(races=index, start_lanes=spec.start_lanes)
+        conditions = spec.drawn()
+        world.reset(
+            races=index,
+            start_lanes=spec.start_lanes,
+            wear=conditions.start_wear,
+            start_offsets=conditions.start_offsets,
+        )
         if drivers is None:
             drivers = [make_agent(name) for name in spec.controllers]
         elif len(drivers) != n:
@@ -250,7 +263,8 @@ class _Race:
             planning,
             hold,
             [0] * n,
-            spec.start_delays(),
+            conditions,
+            conditions.imprecision(),
             LapTimer(n, track.n_checkpoints),
             recorder,
         )
@@ -261,7 +275,7 @@ class _Race:
         observations = observe(world, self.index)
         due = []
         for k, observation in enumerate(observations):
-            delay = self.delays[k]
+            delay = self.conditions.launch_delays[k]
             launching = step * DT >= delay and (step - 1) * DT < delay
             if (step % self.hold[k] == 0 or launching) and not observation.me.finished:
                 due.append((self, k, observation))
@@ -270,9 +284,18 @@ class _Race:
     def hold_waiting(self, actions: np.ndarray, step: int) -> None:
         """Karts still within their launch delay stand (negative throttle reverses); their drivers plan all the
         same."""
-        for k, delay in enumerate(self.delays):
+        for k, delay in enumerate(self.conditions.launch_delays):
             if step * DT < delay:
                 actions[self.index, k] = (0.0, 0.0)
+
+    def with_imprecision(self, world: World, commands: np.ndarray, step: int) -> np.ndarray:
+        """What the karts get of the drivers' ``commands`` (K, 2) this step: the commands, with the drivers'
+        imprecision added for karts that have launched and not finished."""
+        if self.imprecision is None:
+            return commands
+        launched = np.array([step * DT >= delay for delay in self.conditions.launch_delays])
+        racing = world.istate[self.index, :, st.I_FINISHED] == 0
+        return self.imprecision.perturb(commands, launched & racing)
 
     def after_step(self, world: World, actions: np.ndarray, step: int, on_step: RacesHook | None) -> None:
         """Note the step's laps, tell ``on_step`` and record the replay."""
@@ -293,7 +316,7 @@ class _Race:
         """The finished race's outcome."""
         replay = None if self.recorder is None else self.recorder.replay()
         return RaceOutcome(
-            self.spec, world.result(self.index), self.wall, replay, self.laps.all_lap_times(), self.delays
+            self.spec, world.result(self.index), self.wall, replay, self.laps.all_lap_times(), self.conditions
         )
 
 

@@ -97,6 +97,9 @@ def race(
     start_lanes: Annotated[str | None, typer.Option(help="comma-separated start lanes, e.g. 2,3")] = None,
     kart: Annotated[str, typer.Option(help="kart preset: paper or original")] = "paper",
     plan_latency: Annotated[float, typer.Option(min=0.0, help="[s] delay before a new plan applies")] = 0.1,
+    conditions: Annotated[
+        str, typer.Option(help="race conditions drawn from the seed: paper (the original's) or varied")
+    ] = "paper",
     replay: Annotated[Path | None, typer.Option(help="write a JSON replay (poses, inputs, plans) here")] = None,
     as_json: JsonOption = False,
 ) -> None:
@@ -120,7 +123,7 @@ def race(
             raise typer.Exit(2) from None
     try:
         lanes = tuple(int(x) for x in start_lanes.split(",")) if start_lanes else None
-        spec = RaceSpec(track, names, laps, seed, lanes, kart, plan_latency)
+        spec = RaceSpec(track, names, laps, seed, lanes, kart, plan_latency, conditions=conditions)
         outcome = run_race(spec, record=replay is not None)
     except (TrackFormatError, KeyError, ValueError) as exc:
         error(str(exc))
@@ -157,7 +160,8 @@ def race_result_json(outcome: RaceOutcome) -> dict[str, object]:
     record = race_record(
         "headless", status, spec.track, laps, result, karts, faults, setup, outcome.lap_times, manifest=manifest
     )
-    return {**record.to_json(), "wall_seconds": round(outcome.wall_seconds, 3)}
+    drawn = outcome.conditions.to_json() if outcome.conditions is not None else None
+    return {**record.to_json(), "conditions": drawn, "wall_seconds": round(outcome.wall_seconds, 3)}
 
 
 def _print_race(track: str, wall_seconds: float, record: dict[str, Any]) -> None:

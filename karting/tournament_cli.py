@@ -53,9 +53,10 @@ def run(
     laps: Annotated[int | None, typer.Option(min=1, help="laps (default: each track's)")] = None,
     time_limit: Annotated[float | None, typer.Option(min=1.0, help="[s] race time limit (default: the rules')")] = None,
     kart: Annotated[str, typer.Option(help="kart preset: paper or original")] = "paper",
-    start_spread: Annotated[
-        float, typer.Option(min=0.0, help="[s] launch delays drawn from each race's seed, uniform in [0, S)")
-    ] = 0.0,
+    conditions: Annotated[
+        str,
+        typer.Option(help="race conditions drawn from each race's seed: varied (launches, wear, imprecision) or paper"),
+    ] = "varied",
     backend: Annotated[str, typer.Option(help="process (worker processes), inline or ray")] = "process",
     workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per CPU)")] = None,
     ray_address: Annotated[str | None, typer.Option(help="Ray cluster address (default: local Ray)")] = None,
@@ -73,7 +74,7 @@ def run(
     from server.tournament_db import TournamentStatus
 
     spec = TournamentSpec(
-        _names(agents), _names(tracks), races_per_pair, seed, laps, time_limit, kart, start_spread=start_spread
+        _names(agents), _names(tracks), races_per_pair, seed, laps, time_limit, kart, conditions=conditions
     )
     problems = spec.problems()
     if backend not in BACKENDS:

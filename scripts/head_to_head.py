@@ -4,9 +4,9 @@ per-race figures summed up. Prints one line per race and a JSON summary as the l
     .venv/bin/python scripts/head_to_head.py --track complex --karts mcts-lqng,fixed-lqng --races 50
 
 ``--workers N`` races N at a time in separate processes; every race is seeded, so the lines and the summary are
-the same as one process gives, in the same order. ``--start-spread S`` launches each kart after a delay drawn from
-the race's seed, uniform in [0, S) seconds (:meth:`controllers.race.RaceSpec.start_delays`): the same delays for
-any pair of controllers, so a series against a control pair is a paired comparison.
+the same as one process gives, in the same order. ``--conditions varied`` draws each race's conditions from its seed
+(:mod:`sim_core.conditions`: launch reactions, start wear, the drivers' imprecision): the same conditions for any
+pair of controllers, so a series against a control pair is a paired comparison.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import typer
 
-from controllers.race import MAX_START_SPREAD, RaceSpec, run_race
+from controllers.race import RaceSpec, run_race
 from controllers.race_metrics import RaceMetrics
 from sim_core.world import RaceResult
 
@@ -37,11 +37,11 @@ class RaceRun:
     delays: tuple[float, ...] = ()  # [s] per kart: launch delay
 
 
-def race_once(track: str, names: tuple[str, ...], index: int, seed: int, start_spread: float = 0.0) -> RaceRun:
+def race_once(track: str, names: tuple[str, ...], index: int, seed: int, conditions: str = "paper") -> RaceRun:
     """Race ``names`` on ``track``: kart 0 starts in lane 2 when ``index`` is even, lane 3 when odd."""
     lanes = (2, 3) if index % 2 == 0 else (3, 2)
     metrics = RaceMetrics(len(names))
-    spec = RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes, start_spread=start_spread)
+    spec = RaceSpec(track=track, controllers=names, seed=seed, start_lanes=lanes, conditions=conditions)
     outcome = run_race(spec, on_step=metrics)
     right, judged = [0] * len(names), [0] * len(names)
     for predictor, predicted, checkpoint, lane in metrics.predictions:
@@ -63,9 +63,7 @@ def main(
     races: int = typer.Option(50, min=1),
     first_seed: int = typer.Option(0),
     workers: int = typer.Option(1, min=1, help="races run at a time, each in its own process"),
-    start_spread: float = typer.Option(
-        0.0, min=0.0, max=MAX_START_SPREAD, help="[s] launch delays drawn uniform in [0, S) from each race's seed"
-    ),
+    conditions: str = typer.Option("paper", help="race conditions drawn from each race's seed: paper or varied"),
 ) -> None:
     """Race ``karts`` ``races`` times; kart 0 starts in lane 2 in even races and lane 3 in odd ones."""
     names = tuple(karts.split(","))
@@ -95,7 +93,7 @@ def main(
     seeds = [first_seed + i for i in range(races)]
     with ProcessPoolExecutor(workers) as pool:
         mapper = pool.map if workers > 1 else map
-        for run in mapper(race_once, [track] * races, [names] * races, range(races), seeds, [start_spread] * races):
+        for run in mapper(race_once, [track] * races, [names] * races, range(races), seeds, [conditions] * races):
             result = run.result
             for k in range(len(names)):
                 right[k] += run.right[k]
@@ -129,7 +127,7 @@ def main(
                 f"p{kart.passes}"
                 for k, kart in enumerate(result.karts)
             ]
-            launch = f" delays {'/'.join(f'{d:.3f}' for d in run.delays)}" if start_spread > 0 else ""
+            launch = f" delays {'/'.join(f'{d:.3f}' for d in run.delays)}" if any(run.delays) else ""
             print(
                 f"race {run.index:3d} seed {run.seed} lanes {run.lanes}{launch} winner {result.winner} | "
                 + " | ".join(figures),
@@ -138,7 +136,7 @@ def main(
     summary: dict[str, object] = {
         "track": track,
         "races": races,
-        "start_spread": start_spread,
+        "conditions": conditions,
         "wins": dict(zip(labels, wins, strict=True)),
         "completion": dict(zip(labels, [f / races for f in finished], strict=True)),
         # each kart's races and wins by its start lane: {label: {lane: [races, wins]}}

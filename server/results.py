@@ -23,6 +23,7 @@ from arena.manifest import Manifest, build_manifest, describe_controller, time_l
 from controllers.registry import ControllerSpec
 from server.race_config import KartEntry, RaceConfig
 from server.status import RaceStatus
+from sim_core.conditions import PAPER
 from sim_core.world import KartResult, RaceResult, grid_lanes
 
 log = logging.getLogger(__name__)
@@ -220,7 +221,7 @@ def live_race_manifest(
         "track": config.track_name,
         "laps": config.laps,
         "start_lanes": list(grid_lanes(len(config.karts), config.start_lanes)),
-        "start_spread": 0.0,
+        "conditions": PAPER.to_json(),
         "plan_latency": None,
         "plan_budget_s": plan_budget_s,
         "seed": config.seed,

@@ -7,6 +7,7 @@ in packed numpy arrays (layout in :mod:`sim_core.state`) and is advanced by the 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -157,12 +158,15 @@ class World:
         self,
         races: int | list[int] | None = None,
         start_lanes: tuple[int, ...] | list[int] | None = None,
-        wear: float | None = None,
+        wear: float | Sequence[float] | None = None,
+        start_offsets: Sequence[float] | None = None,
     ) -> None:
         """Put karts on the starting grid of the given races (all by default), at rest.
 
         The front row stands ``START_OFFSET`` m past checkpoint 0 in ``start_lanes`` (default lanes 2, 3, 1, 4);
-        karts 5-8 form a second row behind the line. Every counter is cleared.
+        karts 5-8 form a second row behind the line; each kart a further ``start_offsets[k]`` m back (a staggered
+        grid). ``wear``: the start wear of every kart, or one per kart (default the rules'). Every counter is
+        cleared.
         """
         lanes = tuple(start_lanes) if start_lanes is not None else DEFAULT_START_LANES
         n_lanes = self.track.n_lanes
@@ -172,14 +176,18 @@ class World:
             if not 1 <= lane <= n_lanes:
                 raise ValueError(f"start lanes must be in 1..{n_lanes}, got {list(lanes)}")
         start_wear = self.params.rules.start_wear if wear is None else wear
+        wears = [float(start_wear)] * self.n_karts if isinstance(start_wear, (int, float)) else list(start_wear)
+        behind = [0.0] * self.n_karts if start_offsets is None else [float(o) for o in start_offsets]
+        if len(wears) != self.n_karts or len(behind) != self.n_karts:
+            raise ValueError(f"need one start wear and one start offset for each of the {self.n_karts} karts")
         for b in self._race_list(races):
             self.clear_race(b)
             for k in range(self.n_karts):
                 row, col = divmod(k, 4)
                 lane = lanes[k] if k < len(lanes) else DEFAULT_START_LANES[col]  # as grid_lanes
-                offset = START_OFFSET - ROW_SPACING * row
+                offset = START_OFFSET - ROW_SPACING * row - behind[k]
                 d = float(self.track.lane_offsets(0)[lane - 1])
-                self.place_kart(b, k, s=offset, d=d, wear=start_wear)
+                self.place_kart(b, k, s=offset, d=d, wear=wears[k])
         self.sense()
 
     def clear_race(self, race: int) -> None:

@@ -20,12 +20,18 @@ from controllers.registry import make_controller
 from controllers.tactical import rules
 from controllers.tactical.calibration import calibrate_tables
 from controllers.tactical.game import GameParams, build_tables
+from sim_core.conditions import ConditionSet
 from sim_core.params import PAPER_KART
 from sim_core.track_io import get_track
 
 TRACK = get_track("oval")
 LINE = optimise_racing_line(TRACK, PAPER_KART)
 TABLES = calibrate_tables(build_tables(TRACK, PAPER_KART, GameParams()), TRACK, LINE, PAPER_KART)
+
+
+def spread_start(spread: float) -> ConditionSet:
+    """The paper's conditions but launches spread over [0, ``spread``) s (the races these scenarios came from)."""
+    return ConditionSet(f"spread-{spread}", start_spread=spread)
 
 
 def _state(lanes: tuple[int, int], checkpoints: tuple[int, int], times: tuple[int, int]) -> np.ndarray:
@@ -162,7 +168,11 @@ def test_from_a_spread_start_it_spends_no_more_lane_changes_than_the_rule_allows
     until the curve; a guard that held the aim in the lane outright made it turn into complex-reversed's first
     hairpin late, into the kart beside it (a collision at fault)."""
     spec = RaceSpec(
-        track=track, controllers=("mcts-lqng", "fixed-lqng"), seed=seed, start_lanes=(2, 3), start_spread=spread
+        track=track,
+        controllers=("mcts-lqng", "fixed-lqng"),
+        seed=seed,
+        start_lanes=(2, 3),
+        conditions=spread_start(spread),
     )
     tactical, line = run_race(spec).result.karts
     assert tactical.finish_time is not None and line.finish_time is not None
@@ -196,7 +206,7 @@ def test_alongside_in_a_curve_it_does_not_steer_into_the_kart_beside_it() -> Non
         controllers=("mcts-lqng", "fixed-lqng"),
         seed=13,
         start_lanes=(3, 2),
-        start_spread=0.25,
+        conditions=spread_start(0.25),
     )
     assert _race_with_tracker(spec, "fixed-lqng")[0] == 0
     assert _race_with_tracker(spec, "fixed-lqng", _without(AlongsideDiscipline))[0] == 1

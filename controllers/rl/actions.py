@@ -75,7 +75,10 @@ def world_actions(kart: KartParams, speed: np.ndarray, action: np.ndarray) -> tu
     against. NaN actions count as 0."""
     a = np.asarray(action, dtype=np.float64)
     flat = np.ascontiguousarray(a).reshape(-1, 2)
-    speeds = np.ascontiguousarray(np.broadcast_to(np.asarray(speed, dtype=np.float64), a.shape[:-1])).reshape(-1)
+    speeds = np.asarray(speed, dtype=np.float64)
+    if speeds.shape != a.shape[:-1]:
+        speeds = np.broadcast_to(speeds, a.shape[:-1])
+    speeds = np.ascontiguousarray(speeds).reshape(-1)
     out = np.empty(flat.shape)
     branch = np.empty(flat.shape[0], dtype=np.int64)
     _world_actions(

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import asyncio
 from datetime import datetime
-from typing import Any
+from typing import Any, Literal
 
 from fastapi import APIRouter, HTTPException, Response, status
 from fastapi.exceptions import RequestValidationError
@@ -20,7 +20,6 @@ from arena.records import RaceFigures
 from arena.report import METRIC_TITLES, plan_rows, plot_stems, safety_rows, start_lane_rows, win_rows
 from arena.stats import COMBINED, Standing, leaderboard, tournament_stats
 from arena.tournament import TournamentSpec
-from controllers.race import MAX_START_SPREAD
 from server.deps import API_KEY_RESPONSES, ApiKey, TournamentPlotsDep, Tournaments
 from server.limits import MAX_SEED
 from server.models import ErrorOut, ManifestOut, Name
@@ -50,11 +49,10 @@ class TournamentIn(BaseModel):
     laps: int | None = Field(default=None, ge=1, le=20, description="default: each track's")
     time_limit: float | None = Field(default=None, gt=0.0, le=3600.0, description="[s] default: the rules'")
     kart_preset: str = Field(default="paper", pattern="^(paper|original)$")
-    start_spread: float = Field(
-        default=0.0,
-        ge=0.0,
-        le=MAX_START_SPREAD,
-        description="[s] each kart launches after a delay drawn from its race's seed, uniform in [0, start_spread)",
+    conditions: Literal["paper", "varied"] = Field(
+        default="varied",
+        description="race conditions drawn from each race's seed: varied (launch reactions, start wear, the "
+        "drivers' imprecision) or paper (the original's experiment)",
     )
     id: str | None = Field(default=None, pattern=TOURNAMENT_ID.pattern, description="default: a new id")
 
@@ -166,7 +164,7 @@ def _spec(body: TournamentIn) -> TournamentSpec:
         body.laps,
         body.time_limit,
         body.kart_preset,
-        start_spread=body.start_spread,
+        conditions=body.conditions,
     )
     problems = spec.problems()
     if problems:

@@ -33,10 +33,11 @@ def without_wall_time(plans: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def test_a_small_tournament_of_every_agent_gives_each_race_its_result_alone() -> None:
-    """Every pair of the registered agents on oval and complex (start lanes alternating, launch delays drawn from
-    each race's seed), 2 s races: the batched runner's races equal the same jobs run one by one, to the bit."""
+    """Every pair of the registered agents on oval and complex (start lanes alternating, varied conditions drawn
+    from each race's seed: launch delays, wear, imprecision), 2 s races: the batched runner's races equal the same
+    jobs run one by one, to the bit."""
     spec = TournamentSpec(
-        agents=tuple(controller_names()), races_per_pair=1, time_limit=2.0, seed=11, start_spread=0.5
+        agents=tuple(controller_names()), races_per_pair=1, time_limit=2.0, seed=11, conditions="varied"
     ).validate()
     jobs = spec.jobs()
     assert len({job.track for job in jobs}) == 2 and len(jobs) == 2 * len(spec.pairs())
@@ -115,7 +116,7 @@ def coaster() -> Iterator[str]:
 
 def test_a_users_controller_without_a_batch_path_races_in_a_batched_tournament(coaster: str) -> None:
     spec = TournamentSpec(agents=(coaster, "lane-follower", "fixed-lqng"), tracks=("oval",), races_per_pair=2)
-    spec = replace(spec, time_limit=3.0, seed=5).validate()
+    spec = replace(spec, time_limit=3.0, seed=5, conditions="paper").validate()  # its commands applied as given
     assert not isinstance(Coaster(), BatchDriver)
     batched, one_by_one = MemoryStore(), MemoryStore()
     assert run_tournament(spec, batched, "t", backend="inline", batch=8) == spec.total == 6

@@ -33,6 +33,7 @@ from server.race_config import KartEntry, RaceConfig
 from server.results import RaceRecord, live_race_manifest
 from server.routes.tournaments import _view
 from server.tournament_db import TournamentDatabase, race_id
+from sim_core.conditions import condition_set
 from sim_core.params import kart_preset
 from sim_core.track_io import get_track
 
@@ -71,7 +72,8 @@ def test_a_stored_tournament_and_its_races_list_every_parameter_and_the_conditio
     conditions = manifest.conditions
     assert conditions["tracks"] == ["oval"] and conditions["laps"] == {"oval": 1} and conditions["time_limit"] == 30.0
     assert conditions["start_lanes"] == {"even_races": [2, 3], "odd_races": [3, 2]} and conditions["seed"] == 0
-    assert conditions["plan_latency"] == 0.1 and conditions["start_spread"] == 0.0
+    assert conditions["plan_latency"] == 0.1 and conditions["conditions"]["name"] == SMALL.conditions
+    assert conditions["conditions"]["start_spread"] == condition_set(SMALL.conditions).start_spread
     # each race's own manifest: made where it raced, stored in its result and shown by the API's model
     for index, lanes in ((0, [2, 3]), (1, [3, 2])):
         race = database.get(race_id("small", index))

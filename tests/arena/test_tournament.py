@@ -40,7 +40,9 @@ def test_the_schedule_covers_every_pair_on_every_track_with_alternating_lanes_an
     }
     assert [j.start_lanes for j in jobs[:4]] == [(2, 3), (3, 2), (2, 3), (3, 2)]
     assert [j.seed for j in jobs] == [j.seed for j in spec.jobs()]  # reproducible
-    assert len({j.seed for j in jobs}) == 24  # and different for every race
+    # a paired design: race r of every pair on a track shares its seed; different races and tracks do not
+    assert len({j.seed for j in jobs}) == 8
+    assert len({(j.track, j.seed) for j in jobs}) == 8 and {j.seed for j in jobs[:4]} == {j.seed for j in jobs[4:8]}
     assert [j.seed for j in TournamentSpec(("a", "b", "c"), ("oval", "complex"), 4, seed=2).jobs()] != [
         j.seed for j in jobs
     ]
@@ -53,7 +55,7 @@ def test_a_spec_names_every_problem() -> None:
     with pytest.raises(ValueError, match="schumacher"):
         TournamentSpec(agents=("fixed-lqng", "schumacher")).validate()
     assert TournamentSpec.from_json(json.loads(json.dumps(SMALL.to_json()))) == SMALL
-    assert "start_spread" in TournamentSpec(agents=("fixed-lqng", "e2e"), start_spread=2.5).problems()
+    assert "conditions" in TournamentSpec(agents=("fixed-lqng", "e2e"), conditions="wet").problems()
 
 
 def test_an_agent_with_parameters_races_as_its_own_agent_with_them() -> None:
@@ -77,14 +79,22 @@ def test_an_agent_with_parameters_races_as_its_own_agent_with_them() -> None:
     assert "'speed_scale' = 0.1 is below its minimum 0.5" in bad
 
 
-def test_a_spread_start_reaches_every_race_and_old_specs_read_back_without_one() -> None:
-    spread = TournamentSpec(agents=("a", "b"), tracks=("oval",), races_per_pair=3, start_spread=0.25)
-    jobs = spread.jobs()
-    assert all(j.start_spread == 0.25 and j.spec().start_spread == 0.25 for j in jobs)
-    delays = [j.spec().start_delays() for j in jobs]
-    assert all(0.0 <= d < 0.25 for pair in delays for d in pair) and len(set(delays)) == 3
-    stored_before_the_spread = {k: v for k, v in SMALL.to_json().items() if k != "start_spread"}
-    assert TournamentSpec.from_json(stored_before_the_spread) == SMALL and SMALL.start_spread == 0.0
+def test_the_conditions_reach_every_race_paired_across_pairs_and_old_specs_read_back_as_paper() -> None:
+    spec = TournamentSpec(agents=("a", "b", "c"), tracks=("oval", "complex"), races_per_pair=3)
+    assert spec.conditions == "varied"  # a tournament's default
+    jobs = spec.jobs()
+    assert all(j.conditions == "varied" and j.spec().conditions == "varied" for j in jobs)
+    by_pair: dict[tuple[str, tuple[str, ...]], list[object]] = {}
+    for job in jobs:
+        by_pair.setdefault((job.track, job.agents), []).append(job.spec().drawn())
+    oval = [drawn for (track, _), drawn in by_pair.items() if track == "oval"]
+    assert len(oval) == 3 and oval[0] == oval[1] == oval[2]  # race r of every pair: the same conditions
+    assert len(set(map(str, oval[0]))) == 3  # different races of a pair: different conditions
+    complex_ = [drawn for (track, _), drawn in by_pair.items() if track == "complex"]
+    assert complex_[0] != oval[0]
+    stored_with_a_spread = {**SMALL.to_json(), "start_spread": 0.0}
+    stored_with_a_spread.pop("conditions")
+    assert TournamentSpec.from_json(stored_with_a_spread).conditions == "paper"
 
 
 def test_a_reduced_grid_in_worker_processes_equals_the_same_grid_run_inline() -> None:

@@ -61,8 +61,8 @@ def test_bad_tournaments_exit_with_2(tmp_path: Path) -> None:
     assert unknown.exit_code == 2 and "nope" in unknown.output
     backend = runner.invoke(app, ["tournament", "run", "--agents", "e2e,fixed-rl", "--backend", "x", "--db", db])
     assert backend.exit_code == 2 and "unknown backend" in backend.output
-    spread = runner.invoke(app, ["tournament", "run", "--agents", "e2e,fixed-rl", "--start-spread", "3", "--db", db])
-    assert spread.exit_code == 2 and "start_spread" in spread.output
+    wet = runner.invoke(app, ["tournament", "run", "--agents", "e2e,fixed-rl", "--conditions", "wet", "--db", db])
+    assert wet.exit_code == 2 and "unknown conditions 'wet'" in wet.output
     neither = runner.invoke(app, ["tournament", "stats"], env=ENV)
     assert neither.exit_code == 2
     missing = runner.invoke(app, ["tournament", "report", "nope", "--db", db], env=ENV)

@@ -52,17 +52,14 @@ def _launch_from_the_form(page: Page, base: str) -> None:
     page.get_by_label("time limit [s]").fill("30")
     page.get_by_label("id", exact=True).fill(TOURNAMENT_ID)
     assert page.locator("#size-hint").inner_text() == "2 races in all"
-    page.get_by_label("start spread [s]").fill("3")
-    page.get_by_role("button", name="Start tournament").click()
-    page.wait_for_function("() => document.querySelector('#launch-msg').textContent.includes('start_spread')")
-    assert "422: start_spread: Input should be less than or equal to 2" in error.inner_text()
-    page.get_by_label("start spread [s]").fill("0.25")
+    assert page.get_by_label("conditions").input_value() == "varied"  # a tournament's default
+    page.get_by_label("conditions").select_option("paper")
     page.get_by_role("button", name="Start tournament").click()
     page.wait_for_url(f"{base}/tournaments/{TOURNAMENT_ID}")
-    spread = page.locator("#spec dt", has_text="start spread").locator("xpath=following-sibling::dd[1]")
-    assert spread.inner_text() == "0.25 s"
+    shown = page.locator("#spec dt", has_text="conditions").locator("xpath=following-sibling::dd[1]")
+    assert shown.inner_text() == "paper"
     stored = httpx.get(f"{base}/api/tournaments/{TOURNAMENT_ID}", timeout=30).json()
-    assert stored["spec"]["start_spread"] == 0.25
+    assert stored["spec"]["conditions"] == "paper"
 
 
 def _follow_the_progress(page: Page) -> set[str]:

@@ -30,7 +30,7 @@ function specItems(spec) {
     ["laps", spec.laps === null || spec.laps === undefined ? "each track's" : spec.laps],
     ["time limit", spec.time_limit === null || spec.time_limit === undefined ? "the rules'" : `${spec.time_limit} s`],
     ["kart preset", spec.kart_preset],
-    ["start spread", spec.start_spread ? `${spec.start_spread} s` : "none (simultaneous)"],
+    ["conditions", spec.conditions || "paper"],
   ];
   return items.flatMap(([name, value]) => [el("dt", {}, name), el("dd", {}, String(value))]);
 }
@@ -178,7 +178,7 @@ async function resume() {
   if (!current) return;
   const spec = current.spec || {};
   const body = {id: current.id};
-  for (const key of ["agents", "tracks", "races_per_pair", "seed", "laps", "time_limit", "kart_preset", "start_spread"]) body[key] = spec[key];
+  for (const key of ["agents", "tracks", "races_per_pair", "seed", "laps", "time_limit", "kart_preset", "conditions"]) body[key] = spec[key];
   const button = document.getElementById("resume");
   button.disabled = true;
   try {

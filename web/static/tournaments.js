@@ -121,7 +121,7 @@ async function launch(event) {
     laps: numberField("laps"),
     time_limit: numberField("time-limit"),
     kart_preset: document.getElementById("kart-preset").value,
-    start_spread: numberField("start-spread") ?? 0,
+    conditions: document.getElementById("conditions").value,
     id: id === "" ? null : id,
   };
   msg.className = "msg";

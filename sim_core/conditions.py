@@ -1,0 +1,197 @@
+"""Race conditions: how a race starts and what its drivers' hands add, drawn from the race's seed.
+
+A race is deterministic for its seed, which is right for reproducing one; an experiment must also sample the
+conditions a race can start and run under. A :class:`ConditionSet` names the distributions; :meth:`ConditionSet.draw`
+turns a seed into one race's :class:`RaceConditions`:
+
+* **launch reaction**: each kart launches after a delay uniform in [0, ``start_spread``) (a driver's reaction to
+  the lights);
+* **grid**: side by side in the front row (the paper's), or ``staggered``: each kart ``stagger`` m behind the one
+  before it in grid order (the order of :data:`sim_core.world.DEFAULT_START_LANES`: lane 2 on pole), as real
+  karting grids stand; which kart starts in which lane is the race's (a tournament alternates them);
+* **tyre wear at the start**, per kart, uniform in ``wear_range`` (the lateral grip falls with wear,
+  :func:`sim_core.kart.lateral_limit`);
+* **driver imprecision**: seeded noise added to each kart's steer and throttle commands, an Ornstein-Uhlenbeck
+  process (standard deviations ``steer_noise`` and ``throttle_noise`` of full scale, correlation time
+  ``noise_time``): a hand's slow drift, not a per-step jitter the kart's inertia would average away.
+
+The draws depend on the seed and the number of karts alone, never on the drivers: two pairings raced with the same
+seeds meet the same conditions (a paired design). Named sets: :data:`CONDITION_SETS`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from sim_core.params import DT, RuleParams
+
+GridLayout = Literal["side_by_side", "staggered"]
+GRID_LAYOUTS: tuple[GridLayout, ...] = ("side_by_side", "staggered")
+MAX_START_SPREAD = 2.0  # [s]
+MAX_NOISE = 0.5  # of full scale: beyond it the commands are more noise than driver
+# keep the random streams of each condition apart from each other and from any other use of the seed
+LAUNCH_STREAM, WEAR_STREAM, NOISE_STREAM = 0x57A27, 0x3EA2, 0x4015E
+PAPER_WEAR = RuleParams().start_wear
+
+
+@dataclass(frozen=True)
+class RaceConditions:
+    """One race's conditions, drawn (:meth:`ConditionSet.draw`): what a result records of how its race ran."""
+
+    name: str  # the set drawn from
+    launch_delays: tuple[float, ...]  # [s] per kart
+    start_offsets: tuple[float, ...]  # [m] per kart, how far behind its grid row's line it stands
+    start_wear: tuple[float, ...]  # [-] per kart
+    steer_noise: float  # standard deviation, of full lock
+    throttle_noise: float  # standard deviation, of full throttle
+    noise_time: float  # [s] correlation time of the noise
+    noise_seed: int  # seeds the noise's stream (:class:`Imprecision`)
+
+    @property
+    def imprecise(self) -> bool:
+        """Whether the drivers' commands get noise."""
+        return self.steer_noise > 0.0 or self.throttle_noise > 0.0
+
+    def imprecision(self) -> Imprecision | None:
+        """The noise source of this race's karts (``None`` without noise)."""
+        if not self.imprecise:
+            return None
+        n = len(self.launch_delays)
+        return Imprecision(n, self.steer_noise, self.throttle_noise, self.noise_time, self.noise_seed)
+
+    def to_json(self) -> dict[str, Any]:
+        """Every value, for a result's record."""
+        return {**asdict(self), **{k: list(getattr(self, k)) for k in ("launch_delays", "start_offsets", "start_wear")}}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> RaceConditions:
+        """Read back :meth:`to_json`."""
+        tuples = {k: tuple(float(v) for v in data[k]) for k in ("launch_delays", "start_offsets", "start_wear")}
+        return cls(**{**data, **tuples})
+
+
+@dataclass(frozen=True)
+class ConditionSet:
+    """The distributions a race's conditions are drawn from (see the module notes); ``name`` says which set."""
+
+    name: str
+    start_spread: float = 0.0  # [s] launch delays uniform in [0, start_spread)
+    grid: GridLayout = "side_by_side"
+    stagger: float = 2.0  # [m] between consecutive karts of a staggered grid
+    wear_range: tuple[float, float] = (PAPER_WEAR, PAPER_WEAR)  # [-] start wear uniform in this range
+    steer_noise: float = 0.0  # standard deviation, of full lock
+    throttle_noise: float = 0.0  # standard deviation, of full throttle
+    noise_time: float = 0.3  # [s] correlation time
+    description: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        problems = self.problems()
+        if problems:
+            raise ValueError(f"conditions {self.name!r}: " + "; ".join(problems))
+
+    def problems(self) -> list[str]:
+        """What is out of range (empty: nothing)."""
+        found = []
+        if not 0.0 <= self.start_spread <= MAX_START_SPREAD:
+            found.append(f"start_spread must be in [0, {MAX_START_SPREAD}] s, got {self.start_spread}")
+        if self.grid not in GRID_LAYOUTS:
+            found.append(f"grid must be one of {list(GRID_LAYOUTS)}, got {self.grid!r}")
+        if not 0.0 <= self.stagger <= 10.0:
+            found.append(f"stagger must be in [0, 10] m, got {self.stagger}")
+        low, high = self.wear_range
+        if not 0.0 <= low <= high < 1.0:
+            found.append(f"wear_range must be 0 <= low <= high < 1, got {self.wear_range}")
+        for name in ("steer_noise", "throttle_noise"):
+            if not 0.0 <= getattr(self, name) <= MAX_NOISE:
+                found.append(f"{name} must be in [0, {MAX_NOISE}], got {getattr(self, name)}")
+        if not self.noise_time > 0.0:
+            found.append(f"noise_time must be > 0 s, got {self.noise_time}")
+        return found
+
+    def draw(self, seed: int, n_karts: int, start_lanes: tuple[int, ...] | None = None) -> RaceConditions:
+        """The conditions of race ``seed`` for ``n_karts`` karts; ``start_lanes`` orders a staggered grid (lane 2
+        on pole, then 3, 1, 4; default: the karts' order)."""
+        delays = (0.0,) * n_karts
+        if self.start_spread > 0.0:
+            launch = np.random.default_rng([abs(seed), LAUNCH_STREAM])
+            delays = tuple(float(d) for d in launch.uniform(0.0, self.start_spread, n_karts))
+        low, high = self.wear_range
+        wear = (low,) * n_karts
+        if high > low:
+            wear = tuple(float(w) for w in np.random.default_rng([abs(seed), WEAR_STREAM]).uniform(low, high, n_karts))
+        return RaceConditions(
+            self.name,
+            delays,
+            self.start_offsets(n_karts, start_lanes),
+            wear,
+            self.steer_noise,
+            self.throttle_noise,
+            self.noise_time,
+            int(np.random.SeedSequence([abs(seed), NOISE_STREAM]).generate_state(1)[0]),
+        )
+
+    def start_offsets(self, n_karts: int, start_lanes: tuple[int, ...] | None = None) -> tuple[float, ...]:
+        """[m] how far behind its row's line each kart stands: 0 side by side; on a staggered grid ``stagger``
+        per place in grid order (pole: the kart in lane 2, then 3, 1, 4; karts 5-8 likewise in the second row)."""
+        if self.grid == "side_by_side":
+            return (0.0,) * n_karts
+        order = (2, 3, 1, 4)
+        ranks = []
+        for k in range(n_karts):
+            lane = start_lanes[k] if start_lanes is not None else order[k % 4]
+            ranks.append(order.index(lane) if lane in order else k % 4)
+        return tuple(self.stagger * rank for rank in ranks)
+
+    def to_json(self) -> dict[str, Any]:
+        """Every parameter (a manifest's record of the set)."""
+        return {**asdict(self), "wear_range": list(self.wear_range)}
+
+
+class Imprecision:
+    """The drivers' hands: an Ornstein-Uhlenbeck noise per kart on steer and throttle, stepped once per
+    simulation step (x <- a x + sqrt(1 - a^2) sigma e, a = exp(-dt / tau): stationary, standard deviation sigma)."""
+
+    def __init__(self, n_karts: int, steer: float, throttle: float, time: float, seed: int) -> None:
+        self.rng = np.random.default_rng(seed)
+        self.decay = math.exp(-DT / time)
+        self.sigma = np.array([steer, throttle])
+        self.state = self.rng.standard_normal((n_karts, 2)) * self.sigma  # from the stationary distribution
+
+    def perturb(self, commands: np.ndarray, driving: np.ndarray) -> np.ndarray:
+        """``commands`` (K, 2) with this step's noise added (clipped to [-1, 1]) where ``driving`` (K,) is true;
+        the noise advances every step for every kart, so a kart's noise does not depend on the others'."""
+        self.state = self.decay * self.state + math.sqrt(1.0 - self.decay**2) * self.sigma * self.rng.standard_normal(
+            self.state.shape
+        )
+        noisy = np.clip(commands + self.state, -1.0, 1.0)
+        return np.where(driving[:, None], noisy, commands)
+
+
+PAPER = ConditionSet(
+    "paper",
+    description="the original's experiment: every kart launches at once from a side-by-side grid, start wear "
+    f"{PAPER_WEAR}, no imprecision",
+)
+VARIED = ConditionSet(
+    "varied",
+    start_spread=0.25,
+    wear_range=(PAPER_WEAR - 0.05, PAPER_WEAR + 0.05),
+    steer_noise=0.03,
+    throttle_noise=0.05,
+    noise_time=0.3,
+    description="launch reactions within 0.25 s, start wear within +-0.05 of the paper's, and small seeded "
+    "noise on every command (docs/conditions.md: the magnitude and its measurement)",
+)
+CONDITION_SETS: dict[str, ConditionSet] = {s.name: s for s in (PAPER, VARIED)}
+
+
+def condition_set(name: str) -> ConditionSet:
+    """The named set (``KeyError`` naming the known ones)."""
+    try:
+        return CONDITION_SETS[name]
+    except KeyError:
+        raise KeyError(f"unknown conditions {name!r}; known: {sorted(CONDITION_SETS)}") from None
