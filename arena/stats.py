@@ -31,14 +31,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import combinations
 from typing import Any
 
 import numpy as np
 from scipy import stats as scipy_stats
 
+from arena.intervals import Interval, bootstrap_mean, wilson
+from arena.ratings import Rating, ratings
 from arena.records import COUNTING_RULES, KartFigures, RaceFigures, winner_index
+from arena.start_lanes import StartLanes, start_lane_table
 
 ALPHA = 0.05
 COMBINED = "combined"
@@ -50,11 +53,13 @@ PAPER_ORDER = ("mcts-rl", "e2e", "fixed-rl", "mcts-lqng", "fixed-lqng")
 
 @dataclass(frozen=True)
 class MeanStd:
-    """Mean and population standard deviation (``ddof=0``) of ``n`` samples."""
+    """Mean and population standard deviation (``ddof=0``) of ``n`` samples, and the mean's 95% bootstrap
+    interval (:func:`arena.intervals.bootstrap_mean`; ``None`` below two samples)."""
 
     mean: float
     std: float
     n: int
+    ci95: Interval | None = None
 
     @classmethod
     def of(cls, values: Sequence[float]) -> MeanStd | None:
@@ -62,11 +67,11 @@ class MeanStd:
         if not values:
             return None
         array = np.asarray(values, dtype=float)
-        return cls(float(array.mean()), float(array.std(ddof=0)), len(values))
+        return cls(float(array.mean()), float(array.std(ddof=0)), len(values), bootstrap_mean(array.tolist()))
 
-    def to_json(self) -> dict[str, float]:
-        """``{"mean": m, "std": s}``."""
-        return {"mean": self.mean, "std": self.std}
+    def to_json(self) -> dict[str, Any]:
+        """``{"mean": m, "std": s, "ci95": [low, high] | None}``."""
+        return {"mean": self.mean, "std": self.std, "ci95": self.ci95.to_json() if self.ci95 else None}
 
 
 @dataclass(frozen=True)
@@ -132,59 +137,6 @@ class PairTest:
 
 
 @dataclass(frozen=True)
-class LaneRecord:
-    """Races from one start lane: how many, how many the kart from that lane won and lost (the rest nobody won)."""
-
-    races: int
-    wins: int
-    losses: int
-
-    def to_json(self) -> dict[str, int]:
-        """``{"races", "wins", "losses"}``."""
-        return {"races": self.races, "wins": self.wins, "losses": self.losses}
-
-
-@dataclass(frozen=True)
-class PairLanes:
-    """One agent's record against another (the pair is its key in :class:`StartLanes`) by its start lane, and
-    Fisher's exact test of whether its share of the decided races depends on that lane (``None`` unless it
-    started from exactly two lanes)."""
-
-    by_lane: Mapping[int, LaneRecord]
-    fisher_p: float | None
-
-    def to_json(self) -> dict[str, Any]:
-        """``{"by_lane": {LANE: {"races", "wins", "losses"}}, "fisher_p": p | None, "significant": bool}``."""
-        return {
-            "by_lane": {str(lane): record.to_json() for lane, record in self.by_lane.items()},
-            "fisher_p": self.fisher_p,
-            "significant": self.fisher_p is not None and self.fisher_p < ALPHA,
-        }
-
-
-@dataclass(frozen=True)
-class StartLanes:
-    """How races went by start lane (races with known start lanes only): per lane, the races a kart started from
-    it and that kart's wins and losses; per ordered pair of agents that met in two-kart races, the first one's
-    record by its start lane."""
-
-    races: int  # races with known start lanes
-    by_lane: Mapping[int, LaneRecord]
-    pairs: Mapping[tuple[str, str], PairLanes]
-
-    def to_json(self) -> dict[str, Any]:
-        """``{"races": n, "by_lane": {LANE: {...}}, "pairs": {A: {B: {...}}}}``."""
-        pairs: dict[str, dict[str, Any]] = {}
-        for (a, b), split in self.pairs.items():
-            pairs.setdefault(a, {})[b] = split.to_json()
-        return {
-            "races": self.races,
-            "by_lane": {str(lane): record.to_json() for lane, record in self.by_lane.items()},
-            "pairs": pairs,
-        }
-
-
-@dataclass(frozen=True)
 class TrackStats:
     """The statistics of one track (or of all tracks together)."""
 
@@ -194,6 +146,16 @@ class TrackStats:
     win_tests: Mapping[tuple[str, str], PairTest]  # (a, b) for a before b in ``agents``
     metric_tests: Mapping[str, Mapping[tuple[str, str], PairTest]]  # metric -> (a, b) -> t-test
     start_lanes: StartLanes
+    pairs: Mapping[frozenset[str], PairRaces] = field(default_factory=dict)  # each pair's races, by its agents
+
+    def win_rate(self, a: str, b: str) -> tuple[float, Interval] | None:
+        """``a``'s share of its races against ``b`` won, and its 95% Wilson interval (``None``: they never met)."""
+        pair = self.pairs.get(frozenset((a, b)))
+        if pair is None or not pair.races:
+            return None
+        interval = wilson(self.wins[a][b], pair.races)
+        assert interval is not None
+        return self.wins[a][b] / pair.races, interval
 
     def win_test(self, a: str, b: str) -> PairTest | None:
         """The binomial test of the pair (either order); ``None`` when they never met."""
@@ -207,12 +169,28 @@ class TrackStats:
         found = [t for b in others if (t := tests.get((agent, b)) or tests.get((b, agent))) is not None]
         return bool(found) and all(t.significant for t in found)
 
+    def _pair_json(self, a: str, b: str) -> dict[str, Any]:
+        """``a``'s win rate against ``b`` with its interval, and the pair's races and distinct outcomes."""
+        pair = self.pairs.get(frozenset((a, b)))
+        rate = self.win_rate(a, b)
+        return {
+            "races": pair.races if pair else 0,
+            "win_rate": rate[0] if rate else None,
+            "ci95": rate[1].to_json() if rate else None,
+            "distinct_outcomes": pair.distinct_outcomes if pair else 0,
+        }
+
     def to_json(self) -> dict[str, Any]:
         """``{"wins": {A: {B: n}}, "safety": {A: {...}}, "tests": {...}}`` (see the README)."""
         win_tests: dict[str, dict[str, Any]] = {a: {} for a in self.agents}
         for (a, b), test in self.win_tests.items():
-            win_tests[a][b] = {**test.to_json(), "wins": self.wins[a][b], "losses": self.wins[b][a]}
-            win_tests[b][a] = {**test.to_json(), "wins": self.wins[b][a], "losses": self.wins[a][b]}
+            for first, second in ((a, b), (b, a)):
+                win_tests[first][second] = {
+                    **test.to_json(),
+                    "wins": self.wins[first][second],
+                    "losses": self.wins[second][first],
+                    **self._pair_json(first, second),
+                }
         metric_tests: dict[str, dict[str, dict[str, Any]]] = {}
         for metric, tests in self.metric_tests.items():
             table: dict[str, dict[str, Any]] = {a: {} for a in self.agents}
@@ -233,7 +211,9 @@ class TrackStats:
                     "metrics": {a: {m: self.marked(m, a) for m in self.metric_tests} for a in self.agents},
                 },
                 "method": {
-                    "wins": "scipy.stats.binomtest(wins, wins + losses, 0.5), two-sided",
+                    "wins": "scipy.stats.binomtest(wins, wins + losses, 0.5), two-sided; win_rate: wins / races "
+                    "with its 95% Wilson interval (ci95)",
+                    "means": "ci95: the mean's 95% percentile bootstrap interval (scipy.stats.bootstrap, seeded)",
                     "metrics": "scipy.stats.ttest_ind(a, b) (pooled variance), two-sided; "
                     "marked: significant against every other agent",
                 },
@@ -246,10 +226,14 @@ class TournamentStats:
     """The statistics per track and for all tracks together (:data:`COMBINED`)."""
 
     tracks: Mapping[str, TrackStats]
+    ratings: Sequence[Rating] = ()  # every agent's Plackett-Luce rating from every race (arena.ratings)
 
     def to_json(self) -> dict[str, Any]:
-        """``{"tracks": {TRACK: T, ..., "combined": T}}`` (see the README)."""
-        return {"tracks": {name: track.to_json() for name, track in self.tracks.items()}}
+        """``{"tracks": {TRACK: T, ..., "combined": T}, "ratings": [...]}`` (see the README)."""
+        return {
+            "tracks": {name: track.to_json() for name, track in self.tracks.items()},
+            "ratings": [rating.to_json() for rating in self.ratings],
+        }
 
 
 def agent_order(names: Iterable[str]) -> tuple[str, ...]:
@@ -337,38 +321,28 @@ def t_test(a: str, b: str, values_a: Sequence[float], values_b: Sequence[float])
     return PairTest(a, b, float(result.statistic), float(result.pvalue))
 
 
-def _lane_record(outcomes: Sequence[bool | None]) -> LaneRecord:
-    """``outcomes``: per race True (won), False (lost), None (nobody won)."""
-    return LaneRecord(len(outcomes), sum(o is True for o in outcomes), sum(o is False for o in outcomes))
+@dataclass(frozen=True)
+class PairRaces:
+    """A pair's races: how many, and how many distinct outcomes they had (winner, and every kart's finish time
+    to 10 ms): a series of 50 races with 2 distinct outcomes is two races, repeated."""
+
+    races: int
+    distinct_outcomes: int
 
 
-def start_lane_table(races: Sequence[RaceFigures], agents: Sequence[str]) -> StartLanes:
-    """Wins and losses by start lane over the races whose start lanes are known (see :class:`StartLanes`)."""
-    known = [race for race in races if race.start_lanes is not None]
-    per_lane: dict[int, list[bool | None]] = {}
-    per_pair: dict[tuple[str, str], dict[int, list[bool | None]]] = {}
-    for race in known:
-        assert race.start_lanes is not None
-        index = winner_index(race.karts)
-        for k, lane in enumerate(race.start_lanes):
-            per_lane.setdefault(lane, []).append(None if index is None else index == k)
-        if len(race.karts) != 2 or race.agents[0] == race.agents[1]:
-            continue
-        for k in (0, 1):
-            outcome = None if index is None else index == k
-            pair = (race.agents[k], race.agents[1 - k])
-            per_pair.setdefault(pair, {}).setdefault(race.start_lanes[k], []).append(outcome)
-    pairs = {}
-    for pair, lanes in per_pair.items():
-        by_lane = {lane: _lane_record(lanes[lane]) for lane in sorted(lanes)}
-        p = None
-        if len(by_lane) == 2:
-            table = [[r.wins, r.losses] for r in by_lane.values()]
-            p = float(scipy_stats.fisher_exact(table).pvalue)
-        pairs[pair] = PairLanes(by_lane, p)
-    by_lane = {lane: _lane_record(per_lane[lane]) for lane in sorted(per_lane)}
-    ordered = dict(sorted(pairs.items(), key=lambda item: (agents.index(item[0][0]), agents.index(item[0][1]))))
-    return StartLanes(len(known), by_lane, ordered)
+def race_outcome(race: RaceFigures) -> tuple[object, ...]:
+    """What tells two races' outcomes apart: the winner, and each kart's agent and finish time to 10 ms."""
+    times = tuple((k.agent, None if k.total_time is None else round(k.total_time, 2)) for k in race.karts)
+    return (race.winner(), tuple(sorted(times, key=str)))
+
+
+def pair_races(races: Sequence[RaceFigures]) -> dict[frozenset[str], PairRaces]:
+    """Every pair's races and distinct outcomes (two-kart races of two different agents)."""
+    outcomes: dict[frozenset[str], list[tuple[object, ...]]] = {}
+    for race in races:
+        if len(race.karts) == 2 and race.agents[0] != race.agents[1]:
+            outcomes.setdefault(frozenset(race.agents), []).append(race_outcome(race))
+    return {pair: PairRaces(len(found), len(set(found))) for pair, found in outcomes.items()}
 
 
 def track_stats(races: Sequence[RaceFigures]) -> TrackStats:
@@ -390,6 +364,7 @@ def track_stats(races: Sequence[RaceFigures]) -> TrackStats:
         win_tests,
         metric_tests,
         start_lane_table(races, agents),
+        pair_races(races),
     )
 
 
@@ -401,7 +376,7 @@ def tournament_stats(races: Sequence[RaceFigures]) -> TournamentStats:
     if COMBINED in tracks:
         raise ValueError(f"a track may not be called {COMBINED!r}")
     per_track = {name: track_stats(group) for name, group in tracks.items()}
-    return TournamentStats({**per_track, COMBINED: track_stats(races)})
+    return TournamentStats({**per_track, COMBINED: track_stats(races)}, ratings(races))
 
 
 @dataclass(frozen=True)

@@ -224,7 +224,9 @@ def test_the_plan_following_table_is_the_papers(stats: TournamentStats) -> None:
 
 def test_the_stats_json_has_the_documented_shape(stats: TournamentStats) -> None:
     data = stats.to_json()
-    assert set(data) == {"tracks"} and set(data["tracks"]) == {"oval", "complex", COMBINED}
+    assert set(data) == {"tracks", "ratings"} and set(data["tracks"]) == {"oval", "complex", COMBINED}
+    assert [r["agent"] for r in data["ratings"]][0] == "mcts-rl"  # the paper's best agent rated first
+    assert all(r["ci95"][0] <= r["theta"] <= r["ci95"][1] for r in data["ratings"])
     for table in data["tracks"].values():
         assert set(table) == {"wins", "safety", "start_lanes", "tests"}
         assert table["start_lanes"]["races"] == 500 * (2 if table is data["tracks"][COMBINED] else 1)
@@ -234,7 +236,7 @@ def test_the_stats_json_has_the_documented_shape(stats: TournamentStats) -> None
         assert set(split["by_lane"]["2"]) == {"races", "wins", "losses"}
         assert set(table["wins"]) == set(AGENTS) == set(table["safety"])
         entry = table["safety"]["mcts-rl"]
-        assert set(entry["collisions_at_fault"]) == {"mean", "std"}
+        assert set(entry["collisions_at_fault"]) == {"mean", "std", "ci95"}
         assert (
             entry["illegal_lane_changes"]["rule"] == "checkpoint" and entry["illegal_lane_changes"]["per_step"] is None
         )

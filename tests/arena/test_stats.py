@@ -70,7 +70,9 @@ def test_safety_figures_are_over_all_races_and_plan_figures_over_finished_ones()
         race("oval", kart("a", 70.0, faults=0, per_step=4, checkpoint=2, delta_r=2.0), kart("b", 81.0)),
     ]
     a = tournament_stats(races).tracks["oval"].agent_stats["a"]
-    assert a.collisions_at_fault == MeanStd(4 / 3, float(np.std([1, 3, 0])), 3)
+    collisions = a.collisions_at_fault
+    assert (collisions.mean, collisions.std, collisions.n) == (4 / 3, float(np.std([1, 3, 0])), 3)
+    assert collisions.ci95 is not None and (collisions.ci95.low, collisions.ci95.high) == (0.0, 3.0)  # 3 samples
     assert a.illegal_lane_changes.rule == PER_STEP
     assert a.illegal_lane_changes.headline.mean == 2.0
     assert a.illegal_lane_changes.by_rule[CHECKPOINT].mean == 1.0
@@ -80,12 +82,14 @@ def test_safety_figures_are_over_all_races_and_plan_figures_over_finished_ones()
     assert a.delta_v is not None and a.delta_v.mean == 3.0
     assert a.passes is not None and a.passes.mean == 1.0
     entry = tournament_stats(races).to_json()["tracks"]["oval"]["safety"]["a"]
+    # three samples: the bootstrap's resampled means run from the smallest value to the largest
     assert entry["illegal_lane_changes"] == {
         "mean": 2.0,
         "std": pytest.approx(np.std([2, 0, 4])),
+        "ci95": [0.0, 4.0],
         "rule": PER_STEP,
-        PER_STEP: {"mean": 2.0, "std": pytest.approx(np.std([2, 0, 4]))},
-        CHECKPOINT: {"mean": 1.0, "std": pytest.approx(np.std([1, 0, 2]))},
+        PER_STEP: {"mean": 2.0, "std": pytest.approx(np.std([2, 0, 4])), "ci95": [0.0, 4.0]},
+        CHECKPOINT: {"mean": 1.0, "std": pytest.approx(np.std([1, 0, 2])), "ci95": [0.0, 2.0]},
     }
 
 
