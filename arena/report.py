@@ -32,9 +32,47 @@ METRIC_TITLES = {
 
 
 def _fmt(summary: MeanStd | None, mark: bool = False) -> tuple[str, str]:
+    """(mean with its 95% interval, std. dev.)."""
     if summary is None:
         return "-", "-"
-    return f"{summary.mean:.3g}{'*' if mark else ''}", f"{summary.std:.3g}"
+    interval = f" [{summary.ci95.low:.3g}, {summary.ci95.high:.3g}]" if summary.ci95 is not None else ""
+    return f"{summary.mean:.3g}{'*' if mark else ''}{interval}", f"{summary.std:.3g}"
+
+
+def pair_rows(table: TrackStats) -> list[list[str]]:
+    """Per pair (in the agents' order): the races, the first agent's win rate with its 95% Wilson interval, the
+    distinct outcomes of the pair's races, and how much the grid explains: the first agent's wins from each start
+    lane and Fisher's exact test of the lane's effect (``*``: p < 0.05)."""
+    rows = [["pair", "races", "win rate of the first [95% CI]", "distinct outcomes", "wins from lane 2 / 3", "lane p"]]
+    for i, a in enumerate(table.agents):
+        for b in table.agents[i + 1 :]:
+            rate = table.win_rate(a, b)
+            pair = table.pairs.get(frozenset((a, b)))
+            if rate is None or pair is None:
+                continue
+            value, interval = rate
+            split = table.start_lanes.pairs.get((a, b))
+            lanes = "-"
+            p = "-"
+            if split is not None:
+                lanes = " / ".join(
+                    f"{r.wins} of {r.races}" if (r := split.by_lane.get(lane)) else "-" for lane in (2, 3)
+                )
+                if split.fisher_p is not None:
+                    p = f"{split.fisher_p:.2g}{'*' if split.fisher_p < ALPHA else ''}"
+            cells = [f"{a} vs {b}", str(pair.races), f"{100 * value:.0f}% [{100 * interval.low:.0f}, "]
+            cells[-1] += f"{100 * interval.high:.0f}]"
+            rows.append([*cells, str(pair.distinct_outcomes), lanes, p])
+    return rows
+
+
+def rating_rows(stats: TournamentStats) -> list[list[str]]:
+    """The leaderboard: every agent's Plackett-Luce rating (log-strength, centred) with its 95% interval."""
+    rows = [["rank", "agent", "rating θ [95% CI]", "races"]]
+    for rank, rating in enumerate(stats.ratings, start=1):
+        interval = f" [{rating.ci95.low:.2f}, {rating.ci95.high:.2f}]" if rating.ci95 else ""
+        rows.append([str(rank), rating.agent, f"{rating.theta:.2f}{interval}", str(rating.races)])
+    return rows
 
 
 def win_rows(table: TrackStats) -> list[list[str]]:
@@ -112,10 +150,14 @@ def _markdown(rows: Sequence[Sequence[str]]) -> str:
 def markdown(stats: TournamentStats, title: str) -> str:
     """The whole report as Markdown."""
     parts = [f"# {title}", ""]
+    if stats.ratings:
+        parts += ["## Ratings from every race (Plackett-Luce; a beats b with probability 1 / (1 + e^(θb - θa)))", ""]
+        parts += [_markdown(rating_rows(stats)), ""]
     for track, table in stats.tracks.items():
         name = "All tracks" if track == COMBINED else f"Track `{track}`"
         parts += [f"## {name}", "", "### Head-to-head wins, row agent against column agent", ""]
-        parts += [_markdown(win_rows(table)), "", "### Safety per race: mean and std. dev. over all races", ""]
+        parts += [_markdown(win_rows(table)), "", "### Pairs: win rates with 95% intervals, and the grid's part", ""]
+        parts += [_markdown(pair_rows(table)), "", "### Safety per race: mean [95% CI] and std. dev., all races", ""]
         parts += [_markdown(safety_rows(table)), "", "### Plan following (finished races) and passes", ""]
         parts += [_markdown(plan_rows(table)), ""]
         if table.start_lanes.races:
@@ -124,7 +166,7 @@ def markdown(stats: TournamentStats, title: str) -> str:
     parts += [
         "`*`: significant at p = 0.05 (wins: two-sided binomial test of the pair's decided races; per-race figures: "
         "two-sided pooled t-tests, marked when significant against every other agent; start lanes: Fisher's exact "
-        "test, two-sided).",
+        "test, two-sided). Intervals: 95%, Wilson for win rates, percentile bootstrap for means.",
         "",
     ]
     return "\n".join(parts)
@@ -148,6 +190,7 @@ def write_report(stats: TournamentStats, races: Sequence[RaceFigures], out: str 
         written.append(_write_csv(folder / f"safety_{track}.csv", safety_rows(table)))
         written.append(_write_csv(folder / f"plan_{track}.csv", plan_rows(table)))
         written.append(_write_csv(folder / f"start_lanes_{track}.csv", start_lane_rows(table)))
+        written.append(_write_csv(folder / f"pairs_{track}.csv", pair_rows(table)))
     written += plot_report(stats, races, folder)
     return written
 

@@ -18,6 +18,7 @@ import typer
 from typer.core import TyperCommand
 
 from karting.output import add_row, console, error, print_json, table
+from karting.reproduce_cli import app as reproduce_app
 from karting.tournament_cli import app as tournament_app
 from server.limits import MAX_KARTS, MIN_KARTS
 from sim_core.track_io import TrackFormatError, builtin_track_names, get_track, import_centreline_csv, save_track
@@ -27,6 +28,7 @@ if TYPE_CHECKING:
 
 app = typer.Typer(help="HeadToHead Karting: head-to-head autonomous kart racing with rules.", no_args_is_help=True)
 app.add_typer(tournament_app, name="tournament")
+app.add_typer(reproduce_app, name="reproduce")
 
 JsonOption = Annotated[bool, typer.Option("--json", help="print one JSON object (the last line) instead of tables")]
 

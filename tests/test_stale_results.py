@@ -1,7 +1,6 @@
 """The published results describe the agents as they are now: ``docs/results/`` and the README's results table
-are what ``karting tournament publish`` wrote from a tournament whose agents (every parameter, the trained
-weights) and kart resolve the same in today's registry. A stale table is an error: re-run the tournament and
-publish it. With nothing published, the folder and the README's block hold no table.
+are what ``karting reproduce paper`` wrote from tournaments whose agents (every parameter, the trained weights)
+and kart resolve the same in today's registry. A stale table is an error: run the reproduction again.
 
 How the check itself fails (a changed default, an edited table, a table without a manifest) is tested in
 ``tests/arena/test_manifest_publish.py`` and ``tests/arena/test_manifest.py``.
@@ -11,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from arena.publish import published_problems
+from arena.reproduce import reproduction_problems
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
@@ -19,5 +18,5 @@ README = ROOT / "README.md"
 
 
 def test_the_published_results_are_those_of_the_current_agents() -> None:
-    problems = published_problems(RESULTS, README)
+    problems = reproduction_problems(RESULTS, README)
     assert problems == [], "stale or unpublished results:\n" + "\n".join(problems)

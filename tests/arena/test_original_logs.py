@@ -225,7 +225,7 @@ def test_the_plan_following_table_is_the_papers(stats: TournamentStats) -> None:
 def test_the_stats_json_has_the_documented_shape(stats: TournamentStats) -> None:
     data = stats.to_json()
     assert set(data) == {"tracks", "ratings"} and set(data["tracks"]) == {"oval", "complex", COMBINED}
-    assert [r["agent"] for r in data["ratings"]][0] == "mcts-rl"  # the paper's best agent rated first
+    assert data["ratings"][0]["agent"] == "mcts-rl"  # the paper's best agent rated first
     assert all(r["ci95"][0] <= r["theta"] <= r["ci95"][1] for r in data["ratings"])
     for table in data["tracks"].values():
         assert set(table) == {"wins", "safety", "start_lanes", "tests"}

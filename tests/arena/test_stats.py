@@ -12,7 +12,7 @@ from scipy import stats as scipy_stats
 from arena.original_logs import original_start_lanes
 from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures, winner_index
 from arena.report import plot_stem, plot_stems, start_lane_rows
-from arena.stats import COMBINED, MeanStd, binomial_win_test, leaderboard, t_test, tournament_stats
+from arena.stats import COMBINED, binomial_win_test, leaderboard, t_test, tournament_stats
 
 
 def kart(

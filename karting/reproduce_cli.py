@@ -1,0 +1,56 @@
+"""``karting reproduce``: regenerate the project's published results from scratch (:mod:`arena.reproduce`)."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from karting.output import console, error
+from karting.tournament_cli import DbOption, open_tournaments
+
+app = typer.Typer(help="Regenerate the published results (docs/results/) from scratch.", no_args_is_help=True)
+
+
+@app.command()
+def paper(
+    races_paper: Annotated[int, typer.Option(min=1, help="races per pair and track under paper conditions")] = 50,
+    races_varied: Annotated[int, typer.Option(min=1, help="races per pair and track under varied conditions")] = 100,
+    seed: Annotated[int, typer.Option(help="the tournaments' seed")] = 0,
+    workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per CPU)")] = None,
+    out: Annotated[Path, typer.Option(help="the results folder")] = Path("docs/results"),
+    readme: Annotated[Path, typer.Option(help="the README whose results block gets the findings")] = Path("README.md"),
+    db: DbOption = "runs/reproduce.db",
+) -> None:
+    """Run the paper's round robin (five agents, oval and complex) under paper and varied conditions, publish
+    each into OUT/CONDITIONS/ and the findings beside the paper's into OUT/README.md and the README's results
+    block. Interrupted, it resumes where it stopped (the races are stored in DB)."""
+    from arena.publish import PublishError, publish
+    from arena.reproduce import reproduction_of, reproduction_spec, tournament_id, write_findings
+    from arena.tournament import run_tournament
+    from server.tournament_db import TournamentStatus
+
+    Path(db).parent.mkdir(parents=True, exist_ok=True)
+    store = open_tournaments(db)
+    reproductions = []
+    for conditions, races in (("paper", races_paper), ("varied", races_varied)):
+        spec = reproduction_spec(conditions, races, seed)
+        tid = tournament_id(conditions, races, seed)
+        stored = store.create(tid, spec)
+        console.print(f"{tid}: {spec.total} races ({stored.done} stored already)")
+        started = time.perf_counter()
+        run_tournament(spec, store, tid, backend="process", workers=workers, record=False)
+        store.set_status(tid, TournamentStatus.FINISHED)
+        console.print(f"{tid}: done in {time.perf_counter() - started:.0f} s")
+        tournament = store.publishable(tid)
+        assert tournament is not None
+        try:
+            publish(tournament, out / conditions, None)
+        except PublishError as exc:
+            error(f"cannot publish {tid}:\n{exc}")
+            raise typer.Exit(2) from None
+        reproductions.append(reproduction_of(conditions, tournament))
+    write_findings(reproductions, out, readme)
+    console.print(f"wrote {out}/ and the results block of {readme}")
