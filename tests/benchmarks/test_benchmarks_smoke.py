@@ -21,10 +21,24 @@ BENCHMARKS = ROOT / "benchmarks"
 # file -> (options for a tiny run, keys its JSON line must have)
 TINY: dict[str, tuple[list[str], set[str]]] = {
     "conditions.py": (
-        ["--agents", "fixed-lqng", "--pairs", "fixed-lqng/lane-follower", "--tracks", "oval", "--levels", "1",
-         "--seeds", "1", "--races", "2", "--laps", "1"],
+        [
+            "--agents",
+            "fixed-lqng",
+            "--pairs",
+            "fixed-lqng/lane-follower",
+            "--tracks",
+            "oval",
+            "--levels",
+            "1",
+            "--seeds",
+            "1",
+            "--races",
+            "2",
+            "--laps",
+            "1",
+        ],
         {"varied", "levels", "solo", "max_solo_ratio_error", "pairs"},
-    ),  # fmt: skip
+    ),
     "decision_time.py": (
         ["--steps", "3", "--tracks", "oval"],
         {"slowest_decision_ms", "median_decision_ms", "budget_ms", "within_budget"},
