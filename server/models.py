@@ -110,6 +110,11 @@ class RaceIn(BaseModel):
         description="one start lane (1-based) per kart, as many as karts; default 2, 3, 1, 4",
     )
     kart_preset: Literal["paper", "original"] = "paper"
+    conditions: Literal["paper", "varied"] = Field(
+        "paper",
+        description="race conditions drawn from the seed: paper (every kart launches at once, no imprecision) or "
+        "varied (launch reactions within 0.25 s, start wear, the AI drivers' small imprecision)",
+    )
     karts: list[KartIn] = Field(min_length=MIN_KARTS, max_length=MAX_KARTS)
 
 

@@ -7,6 +7,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from sim_core.conditions import RaceConditions, condition_set
 from sim_core.track import Track
 
 HUMAN = "human"  # the controller name of a kart driven over the drive websocket
@@ -50,3 +51,8 @@ class RaceConfig:
     start_lanes: tuple[int, ...] | None
     kart_preset: str
     karts: tuple[KartEntry, ...]
+    conditions: str = "paper"  # the race conditions' set (sim_core.conditions), drawn from the seed
+
+    def drawn(self) -> RaceConditions:
+        """This race's conditions, drawn from its seed (:meth:`sim_core.conditions.ConditionSet.draw`)."""
+        return condition_set(self.conditions).draw(self.seed, len(self.karts), self.start_lanes)

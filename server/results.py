@@ -23,7 +23,6 @@ from arena.manifest import Manifest, build_manifest, describe_controller, time_l
 from controllers.registry import ControllerSpec
 from server.race_config import KartEntry, RaceConfig
 from server.status import RaceStatus
-from sim_core.conditions import PAPER
 from sim_core.world import KartResult, RaceResult, grid_lanes
 
 log = logging.getLogger(__name__)
@@ -215,13 +214,13 @@ def live_race_manifest(
 ) -> Manifest | None:
     """The manifest of a race the server runs live from ``config`` with the controllers of ``catalogue``: plans
     apply when they arrive (no simulated latency; ``plan_budget_s`` [s] is the wall-clock time one plan may take),
-    every kart launches at once, the rules' time limit. ``None`` (logged) if it cannot be made: a result is
+    the race conditions drawn from its seed, the rules' time limit. ``None`` (logged) if it cannot be made: a result is
     stored without its manifest rather than lost."""
     conditions = {
         "track": config.track_name,
         "laps": config.laps,
         "start_lanes": list(grid_lanes(len(config.karts), config.start_lanes)),
-        "conditions": PAPER.to_json(),
+        "conditions": config.drawn().to_json(),
         "plan_latency": None,
         "plan_budget_s": plan_budget_s,
         "seed": config.seed,

@@ -83,6 +83,8 @@ class RaceSession:
         self._workers = KartWorkers(race_id, self.drivers, services.hosts, self.settings)  # the AI controllers
         self._plans = PlanRequests(race_id, services.planners, self.settings.plan_timeout_s)
         self._actions = np.zeros((1, len(self.drivers), 2))
+        self._conditions = config.drawn()  # launch delays, grid, start wear and the AI drivers' imprecision
+        self._hands = self._conditions.imprecision()
         self._telemetry = TelemetryMessage()
         self._countdown: float | None = None  # [s] left before the start, while counting down
         self._finished = 0  # karts finished at the last tick
@@ -236,7 +238,8 @@ class RaceSession:
     def _build_world(self, params: SimParams) -> World:
         config = self.config
         world = World(config.track, 1, len(self.drivers), params, laps=config.laps)
-        world.reset(start_lanes=config.start_lanes)
+        drawn = self._conditions
+        world.reset(start_lanes=config.start_lanes, wear=drawn.start_wear, start_offsets=drawn.start_offsets)
         return world
 
     async def _open_scene(self) -> None:
@@ -330,6 +333,7 @@ class RaceSession:
             else:
                 d.take_ai_input(self._workers.latest(d.index), step, float(speeds[d.index]), settings.controller_hold_s)
             self._actions[0, d.index] = (d.steer, d.throttle)
+        self._apply_conditions(step)
         world.step(self._actions)
         self.laps.observe(world)
         observations = observe(world, 0)
@@ -341,6 +345,17 @@ class RaceSession:
             self._finished = finished
             self.plans_version += 1
         self._publish()
+
+    def _apply_conditions(self, step: int) -> None:
+        """The race conditions on the AI karts' commands: each stands until its launch delay, then its commands get
+        the drivers' imprecision (a human's launch and hands are their own)."""
+        drawn = self._conditions
+        ai = np.array([not d.human for d in self.drivers])
+        waiting = ai & (np.array(drawn.launch_delays) > step * DT)
+        self._actions[0, waiting] = 0.0
+        if self._hands is not None:
+            racing = self.world is not None and self.world.istate[0, :, st.I_FINISHED] == 0
+            self._actions[0] = self._hands.perturb(self._actions[0], ai & ~waiting & racing)
 
     def _submit(self, observations: Sequence[Observation]) -> None:
         assert self.world is not None

@@ -102,6 +102,7 @@ def race_config(body: RaceIn, catalogue: Mapping[str, ControllerSpec], max_laps:
         start_lanes=tuple(body.start_lanes) if body.start_lanes is not None else None,
         kart_preset=body.kart_preset,
         karts=karts,
+        conditions=body.conditions,
     )
 
 

@@ -8,9 +8,10 @@ import hashlib
 import numpy as np
 import pytest
 
+from controllers.base import Action, RaceContext
 from controllers.race import RaceSpec, run_race
 from sim_core.conditions import VARIED
-from sim_core.observation import observe
+from sim_core.observation import Observation, observe
 from sim_core.params import DT
 from sim_core.state import F_WEAR
 
@@ -73,12 +74,31 @@ def test_each_kart_stands_until_its_delay_then_drives_with_its_drawn_wear() -> N
         assert min(moving) > 0.5
 
 
-def test_imprecision_perturbs_the_applied_commands_not_the_drivers_decisions() -> None:
-    outcome = run_race(_short(seed=2), record=True)
-    paper = run_race(_short(seed=2, conditions="paper"), record=True)
-    assert outcome.replay is not None and paper.replay is not None
-    noisy = np.asarray(outcome.replay.poses)[:, :, 4]  # the steer the karts got
-    clean = np.asarray(paper.replay.poses)[:, :, 4]
-    launched = round(0.3 / DT)
-    residual = noisy[launched:] - clean[launched:]
-    assert 0.3 * VARIED.steer_noise < residual.std() < 10 * VARIED.steer_noise
+class Steady:
+    """A driver that holds one command: straight ahead at 0.6 throttle."""
+
+    name = "steady"
+    rate_hz = 50.0
+
+    def reset(self, context: RaceContext) -> None:
+        """Nothing to prepare."""
+
+    def act(self, observation: Observation) -> Action:
+        """The same command every step."""
+        return Action(0.0, 0.6)
+
+
+def test_imprecision_perturbs_the_applied_commands_by_its_stated_magnitude() -> None:
+    def applied(conditions: str) -> np.ndarray:
+        spec = RaceSpec(track="oval", controllers=("steady", "steady"), seed=2, time_limit=6.0, conditions=conditions)
+        outcome = run_race(spec, record=True, drivers=[Steady(), Steady()])
+        assert outcome.replay is not None
+        launched = round(max(outcome.start_delays) / DT) + 1
+        return np.asarray(outcome.replay.poses)[launched:, :, 4:]  # the steer and throttle the karts got
+
+    paper, varied = applied("paper"), applied("varied")
+    assert np.all(paper == [0.0, 0.6])  # the commands as given
+    steer, throttle = varied[..., 0], varied[..., 1] - 0.6
+    assert steer.std() == pytest.approx(VARIED.steer_noise, rel=0.5)  # 5 s of a 0.3 s correlation time: rough
+    assert throttle.std() == pytest.approx(VARIED.throttle_noise, rel=0.5)
+    assert abs(np.corrcoef(steer[:, 0], steer[:, 1])[0, 1]) < 0.5  # each kart its own hands
