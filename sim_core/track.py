@@ -166,15 +166,23 @@ class Track:
         """World position [m] of ``lane`` (1-based) on the line of ``checkpoint`` (taken modulo a lap)."""
         if not 1 <= lane <= self.n_lanes:
             raise ValueError(f"lane must be in 1..{self.n_lanes}, got {lane}")
-        c = checkpoint % self.n_checkpoints
-        centre, normal = self.checkpoint_frame(c)
-        return centre + normal * self.lane_offsets(c)[lane - 1]
+        return self._lane_point_table[checkpoint % self.n_checkpoints, lane - 1]
 
     def lane_points(self) -> np.ndarray:
         """(N, n_lanes, 2) world positions of every lane point."""
-        return np.stack(
-            [np.stack([self.lane_point(c, k) for k in range(1, self.n_lanes + 1)]) for c in range(self.n_checkpoints)]
-        )
+        return self._lane_point_table.copy()
+
+    @cached_property
+    def _lane_point_table(self) -> np.ndarray:
+        # looked up at every step by every LQ tracker for each kart's next lane points: computed once (the same
+        # arithmetic as per call, so the same numbers to the last bit)
+        points = np.empty((self.n_checkpoints, self.n_lanes, 2))
+        for c in range(self.n_checkpoints):
+            centre, normal = self.checkpoint_frame(c)
+            for k in range(self.n_lanes):
+                points[c, k] = centre + normal * self.lane_offsets(c)[k]
+        points.flags.writeable = False
+        return points
 
     def checkpoint_frame(self, checkpoint: int) -> tuple[np.ndarray, np.ndarray]:
         """(centre, left normal) of the checkpoint line on the sampled centre line."""

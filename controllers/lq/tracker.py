@@ -105,6 +105,8 @@ class LQNGTracker:
         self._line: RacingLine | None = None
         self._kart_vector = np.zeros(0)
         self._steer = 0.0
+        self._checkpoint_s: list[float] = []
+        self._lane_offsets: list[list[float]] = []
 
     def reset(self, context: RaceContext) -> None:
         """Remember the track and kart limits and get the track's racing line (the shape followed between
@@ -113,6 +115,10 @@ class LQNGTracker:
         self._kart_vector = context.kart.as_array()
         self._steer = 0.0
         self._line = optimise_racing_line(context.track, context.kart)
+        # the track's checkpoint positions and lane offsets as floats: looked up for every player at every step,
+        # where a numpy scalar's indexing and arithmetic cost more than the arithmetic (the same numbers)
+        self._checkpoint_s = context.track.checkpoint_s.tolist()
+        self._lane_offsets = [context.track.lane_offsets(c).tolist() for c in range(context.track.n_checkpoints)]
 
     # ------------------------------------------------------------------ targets
     def _upcoming(self, track: Track, kart: KartView, plan: Plan | None, owner: int) -> tuple[Waypoint, Waypoint]:
@@ -140,11 +146,12 @@ class LQNGTracker:
         and its lateral offset from the centre line [m], held within ``bounds`` (lowest, highest offset) if given."""
         p = self.params
         lookahead = max(p.min_lookahead, abs(kart.speed) * p.lookahead_time)
-        n = track.n_checkpoints
-        s1 = (track.checkpoint_s[first.checkpoint % n] - kart.progress) % track.length
-        s2 = s1 + (track.checkpoint_s[second.checkpoint % n] - track.checkpoint_s[first.checkpoint % n]) % track.length
-        d1 = track.lane_offsets(first.checkpoint)[first.lane - 1]
-        d2 = track.lane_offsets(second.checkpoint)[second.lane - 1]
+        n = len(self._checkpoint_s)
+        at1, at2 = first.checkpoint % n, second.checkpoint % n
+        s1 = (self._checkpoint_s[at1] - kart.progress) % track.length
+        s2 = s1 + (self._checkpoint_s[at2] - self._checkpoint_s[at1]) % track.length
+        d1 = self._lane_offsets[at1][first.lane - 1]
+        d2 = self._lane_offsets[at2][second.lane - 1]
         # follow the racing line's shape, shifted where a waypoint's lane is away from it: the correction is
         # the lane's offset from the line (0 when the line already passes within half a lane of it)
         assert self._line is not None

@@ -17,7 +17,16 @@ from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from arena.records import RaceFigures
-from arena.report import METRIC_TITLES, plan_rows, plot_stems, safety_rows, start_lane_rows, win_rows
+from arena.report import (
+    METRIC_TITLES,
+    pair_rows,
+    plan_rows,
+    plot_stems,
+    rating_rows,
+    safety_rows,
+    start_lane_rows,
+    win_rows,
+)
 from arena.stats import COMBINED, Standing, leaderboard, tournament_stats
 from arena.tournament import TournamentSpec
 from server.deps import API_KEY_RESPONSES, ApiKey, TournamentPlotsDep, Tournaments
@@ -134,6 +143,10 @@ class TrackTablesOut(BaseModel):
         description="per pair, the row pair's first agent's wins–losses from each start lane and Fisher's exact test"
         " of the lane's effect; a last row for whichever kart started in each lane"
     )
+    pairs: list[list[str]] = Field(
+        description="per pair: races, the first agent's win rate with its 95% Wilson interval, distinct outcomes, "
+        "wins from each start lane and the lane's test"
+    )
 
 
 class PlotOut(BaseModel):
@@ -151,6 +164,7 @@ class TournamentTablesOut(BaseModel):
     done: int
     total: int
     tracks: dict[str, TrackTablesOut]
+    ratings: list[list[str]] = Field(description="every agent's Plackett-Luce rating with its 95% interval")
     plots: list[PlotOut]
     note: str
 
@@ -314,6 +328,7 @@ def _tables(stored: StoredTournament, figures: list[RaceFigures]) -> TournamentT
             safety=safety_rows(table),
             plan=plan_rows(table),
             start_lanes=start_lane_rows(table),
+            pairs=pair_rows(table),
         )
         for track, table in stats.tracks.items()
     }
@@ -330,11 +345,18 @@ def _tables(stored: StoredTournament, figures: list[RaceFigures]) -> TournamentT
     note = (
         "*: significant at p = 0.05 (wins: two-sided binomial test of the pair's decided races; per-race figures: "
         "two-sided pooled t-tests, marked when significant against every other agent; start lanes: Fisher's exact "
-        "test, two-sided). Safety: mean and std. dev. "
+        "test, two-sided). Intervals: 95%, Wilson for win rates, percentile bootstrap for means. Safety: mean "
+        "[95% interval] and std. dev. "
         f"over all races; {METRIC_TITLES['illegal_lane_changes']} under the rule shown."
     )
     return TournamentTablesOut(
-        id=stored.id, done=len(figures), total=stored.total, tracks=tracks, plots=plots, note=note
+        id=stored.id,
+        done=len(figures),
+        total=stored.total,
+        tracks=tracks,
+        ratings=rating_rows(stats),
+        plots=plots,
+        note=note,
     )
 
 

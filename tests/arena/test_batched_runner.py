@@ -11,15 +11,16 @@ from typing import Any
 
 import numpy as np
 import pytest
+from support.constant_driver import ConstantDriver
 
 from arena.race import RaceJob, run_job, run_jobs
 from arena.tournament import MemoryStore, TournamentSpec, chunks, run_tournament
 from controllers import registry
-from controllers.base import Action, RaceContext
+from controllers.base import RaceContext
 from controllers.lane_follower import LaneFollowerController
 from controllers.race import BatchDriver, RaceSpec, decide, run_races
 from controllers.registry import ControllerSpec, controller_names, register
-from sim_core.observation import Observation, observe
+from sim_core.observation import observe
 from sim_core.params import kart_preset
 from sim_core.track_io import get_track
 from sim_core.world import World
@@ -91,18 +92,11 @@ def test_chunks_keep_to_one_track_to_their_size_and_to_the_schedule() -> None:
         chunks(jobs, 0)
 
 
-class Coaster:
+class Coaster(ConstantDriver):
     """A user's driver with no batch path: straight ahead at 0.6 throttle."""
 
     name = "test-user-coaster"
     rate_hz = 10.0
-
-    def reset(self, context: RaceContext) -> None:
-        """Nothing to prepare."""
-
-    def act(self, observation: Observation) -> Action:
-        """Straight ahead."""
-        return Action(0.0, 0.6)
 
 
 @pytest.fixture

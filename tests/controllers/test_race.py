@@ -7,11 +7,11 @@ import hashlib
 
 import numpy as np
 import pytest
+from support.constant_driver import ConstantDriver
 
-from controllers.base import Action, RaceContext
 from controllers.race import RaceSpec, run_race
 from sim_core.conditions import VARIED
-from sim_core.observation import Observation, observe
+from sim_core.observation import observe
 from sim_core.params import DT
 from sim_core.state import F_WEAR
 
@@ -74,24 +74,12 @@ def test_each_kart_stands_until_its_delay_then_drives_with_its_drawn_wear() -> N
         assert min(moving) > 0.5
 
 
-class Steady:
-    """A driver that holds one command: straight ahead at 0.6 throttle."""
-
-    name = "steady"
-    rate_hz = 50.0
-
-    def reset(self, context: RaceContext) -> None:
-        """Nothing to prepare."""
-
-    def act(self, observation: Observation) -> Action:
-        """The same command every step."""
-        return Action(0.0, 0.6)
-
-
 def test_imprecision_perturbs_the_applied_commands_by_its_stated_magnitude() -> None:
     def applied(conditions: str) -> np.ndarray:
-        spec = RaceSpec(track="oval", controllers=("steady", "steady"), seed=2, time_limit=6.0, conditions=conditions)
-        outcome = run_race(spec, record=True, drivers=[Steady(), Steady()])
+        spec = RaceSpec(
+            track="oval", controllers=("fixed-lqng", "fixed-lqng"), seed=2, time_limit=6.0, conditions=conditions
+        )
+        outcome = run_race(spec, record=True, drivers=[ConstantDriver(), ConstantDriver()])
         assert outcome.replay is not None
         launched = round(max(outcome.start_delays) / DT) + 1
         return np.asarray(outcome.replay.poses)[launched:, :, 4:]  # the steer and throttle the karts got

@@ -10,8 +10,8 @@ import pickle
 import pytest
 from hypothesis import given
 from hypothesis import strategies as hs
+from support.constant_driver import ConstantDriver
 
-from controllers.base import Action, RaceContext
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController
@@ -33,7 +33,6 @@ from controllers.rl.filters import KeepDistance, LineSpeedCeiling, RecoverFromSt
 from controllers.rl.tracker import RLTracker
 from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import MCTSPlanner, TacticalParams
-from sim_core.observation import Observation
 
 
 @pytest.mark.parametrize("name", controller_names())
@@ -225,18 +224,11 @@ def test_a_validated_factory_pickles_for_the_worker_processes() -> None:
         assert pickle.loads(pickle.dumps(REGISTRY[name].factory))().name == name
 
 
-class _Still:
-    """A test-only driver without parameters."""
+class _Still(ConstantDriver):
+    """A test-only driver without parameters: stands still."""
 
     name = "still"
-    rate_hz = 50.0
-
-    def reset(self, context: RaceContext) -> None:
-        """Nothing to prepare."""
-
-    def act(self, observation: Observation) -> Action:
-        """Stands still."""
-        return Action(0.0, 0.0)
+    throttle = 0.0
 
 
 def test_a_controller_without_a_parameter_dataclass_takes_none() -> None:

@@ -17,6 +17,7 @@ import pytest
 from fastapi import FastAPI
 from support.live_server import ServerThread
 
+from arena.intervals import wilson
 from arena.race import FinishedRace
 from arena.tournament import TournamentSpec
 from server.db import RaceDatabase
@@ -153,6 +154,13 @@ def test_the_tables_are_laid_out_like_the_papers(client: httpx.Client) -> None:
         ["fixed-lqng vs lane-follower", "1–0", "0–1", "1"],
         ["any kart", "2–0", "0–2", "-"],
     ]
+    # one race each: a 50% win rate with its Wilson interval for 1 of 2, and two different races
+    interval = wilson(1, 2)
+    assert interval is not None
+    rate = f"50% [{100 * interval.low:.0f}, {100 * interval.high:.0f}]"
+    assert oval["pairs"][1] == ["fixed-lqng vs lane-follower", "2", rate, "2", "1 of 1 / 0 of 1", "1"]
+    assert tables["ratings"][0] == ["rank", "agent", "rating θ [95% CI]", "races"]
+    assert sorted(row[1] for row in tables["ratings"][1:]) == ["fixed-lqng", "lane-follower"]
     names = [p["name"] for p in tables["plots"]]
     assert names == ["wins_oval", "safety_oval", "wins_combined", "safety_combined", "finish_times"]
     assert all(p["url"].startswith(f"/api/tournaments/t1/plots/{p['name']}.png") for p in tables["plots"])

@@ -101,3 +101,17 @@ def test_imprecision_leaves_karts_that_do_not_drive_alone_and_keeps_commands_in_
         out = noise.perturb(commands, np.array([True, False]))
         assert np.all(np.abs(out) <= 1.0)
         assert out[1].tolist() == [0.2, 0.5]
+
+
+def test_the_noise_stepped_in_blocks_is_the_noise_stepped_one_step_at_a_time() -> None:
+    """The reference: one normal draw per step, the update written out."""
+    noise = Imprecision(n_karts=3, steer=0.02, throttle=0.04, time=0.3, seed=11)
+    rng = np.random.default_rng(11)
+    sigma = np.array([0.02, 0.04])
+    decay = math.exp(-DT / 0.3)
+    state = rng.standard_normal((3, 2)) * sigma
+    commands = np.zeros((3, 2))
+    driving = np.ones(3, dtype=bool)
+    for _ in range(2 * Imprecision.BLOCK + 5):  # across block boundaries
+        state = decay * state + math.sqrt(1.0 - decay**2) * sigma * rng.standard_normal((3, 2))
+        assert np.array_equal(noise.perturb(commands, driving), np.clip(state, -1.0, 1.0))

@@ -95,6 +95,11 @@ def _check_the_results(page: Page, base: str) -> None:
     expected = [f"{split[lane]['wins']}–{split[lane]['losses']}" for lane in ("2", "3")]
     assert lanes.all_inner_texts()[:2] == expected
     assert page.locator('table[data-track="combined"]').count() == 0  # one track: no separate combined table
+    # the pair's win rate with its interval and the ratings, as the API's tables
+    tables = httpx.get(f"{base}/api/tournaments/{TOURNAMENT_ID}/tables", timeout=30).json()
+    pair = page.locator('table.pairs[data-track="oval"] tr[data-agent="fixed-lqng vs lane-follower"] td')
+    assert pair.all_inner_texts() == tables["tracks"]["oval"]["pairs"][1][1:]
+    assert page.locator("table.ratings tbody tr").count() == 2
 
     heatmap = page.locator('figure[data-plot="wins_oval"] img')
     heatmap.scroll_into_view_if_needed()

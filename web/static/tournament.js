@@ -104,12 +104,16 @@ function renderResults(report) {
     return el("div", {class: "track-tables", "data-track": track},
       el("h3", {}, track === "combined" ? "All tracks" : `Track ${track}`),
       el("h4", {}, "Head-to-head wins, row agent against column agent"), table(tables.wins, "wins", track),
-      el("h4", {}, "Safety per race (mean and std. dev. over all races)"), table(tables.safety, "safety", track),
+      el("h4", {}, "Pairs: win rates with 95% intervals, distinct outcomes and the grid's part"),
+      table(tables.pairs, "pairs", track),
+      el("h4", {}, "Safety per race (mean [95% interval] and std. dev. over all races)"), table(tables.safety, "safety", track),
       el("h4", {}, "Plan following (finished races) and passes"), table(tables.plan, "plan", track),
       el("h4", {}, "Wins by start lane (the pair's first agent; Fisher's exact test of the lane's effect)"),
       table(tables.start_lanes, "start-lanes", track));
   });
-  document.getElementById("tables").replaceChildren(...sections);
+  const ratings = el("div", {class: "track-tables", "data-track": "ratings"},
+    el("h3", {}, "Ratings from every race (Plackett–Luce, 95% intervals)"), table(report.ratings, "ratings", "all"));
+  document.getElementById("tables").replaceChildren(ratings, ...sections);
   document.getElementById("tables-note").textContent = report.note;
   const plotted = new Set(tracks.map((t) => t.replace(/[^A-Za-z0-9_-]/g, "_")));
   const plots = report.plots.filter((p) => p.name === "finish_times" || plotted.has(p.name.replace(/^(wins|safety)_/, "")));
