@@ -9,14 +9,24 @@ into the results folder's ``README.md`` and the project README's results block (
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from arena.intervals import wilson
-from arena.publish import README_TABLE_FILE, Tournament, _markdown, published_problems, readme_block, replace_block
+from arena.publish import (
+    MANIFEST_FILE,
+    README_TABLE_FILE,
+    Tournament,
+    _markdown,
+    published_problems,
+    readme_block,
+    replace_block,
+)
 from arena.stats import COMBINED, TournamentStats, tournament_stats
 from arena.tournament import TournamentSpec
+from sim_core.conditions import condition_set
 
 PAPER_AGENTS = ("mcts-rl", "e2e", "fixed-rl", "mcts-lqng", "fixed-lqng")
 CONDITIONS = ("paper", "varied")
@@ -172,12 +182,31 @@ def reproduction_problems(out: Path, readme: Path | None) -> list[str]:
     problems = []
     for conditions in CONDITIONS:
         problems += [f"{conditions}/: {p}" for p in published_problems(out / conditions, None)]
+        problems += [f"{conditions}/: {p}" for p in stale_conditions(out / conditions, conditions)]
     table = out / README_TABLE_FILE
     if not table.is_file():
         problems.append(f"{table} is missing: run karting reproduce paper")
     elif readme is not None and readme_block(readme.read_text()) != table.read_text().strip():
         problems.append(f"{readme}'s results block is not {table}")
     return problems
+
+
+def stale_conditions(folder: Path, conditions: str) -> list[str]:
+    """How the condition set a published tournament raced under differs from the set of that name now (empty:
+    it does not, or nothing is published there): results raced under another ``varied`` are not ``varied``'s."""
+    manifest = folder / MANIFEST_FILE
+    if not manifest.is_file():
+        return []
+    recorded = json.loads(manifest.read_text()).get("conditions", {}).get("conditions")
+    now = condition_set(conditions).to_json()
+    if not isinstance(recorded, dict):
+        return [f"its manifest records no {conditions!r} condition set: run karting reproduce paper"]
+    changed = sorted(key for key in set(recorded) | set(now) if recorded.get(key) != now.get(key))
+    return (
+        [f"the {conditions!r} conditions changed since it raced ({', '.join(changed)}): run it again"]
+        if changed
+        else []
+    )
 
 
 def reproduction_of(conditions: str, tournament: Tournament) -> Reproduction:

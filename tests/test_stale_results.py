@@ -1,6 +1,6 @@
 """The published results describe the agents as they are now: ``docs/results/`` and the README's results table
-are what ``karting reproduce paper`` wrote from tournaments whose agents (every parameter, the trained weights)
-and kart resolve the same in today's registry. A stale table is an error: run the reproduction again.
+are what ``karting reproduce paper`` wrote from tournaments whose agents (every parameter, the trained weights),
+kart and condition sets resolve the same in today's code. A stale table is an error: run the reproduction again.
 
 How the check itself fails (a changed default, an edited table, a table without a manifest) is tested in
 ``tests/arena/test_manifest_publish.py`` and ``tests/arena/test_manifest.py``.
