@@ -155,9 +155,11 @@ def run_races(
             race.after_act(world, k, step)
         for race in running:
             race.hold_waiting(actions, step)
-        applied = actions.copy()
-        for race in running:
-            applied[race.index] = race.with_imprecision(world, actions[race.index], step)
+        applied = actions
+        if any(race.imprecision is not None for race in running):  # the drivers' commands stay as they decided
+            applied = actions.copy()
+            for race in running:
+                applied[race.index] = race.with_imprecision(world, actions[race.index], step)
         world.step(applied)
         done = world.done
         for race in running:
@@ -284,18 +286,15 @@ class _Race:
     def hold_waiting(self, actions: np.ndarray, step: int) -> None:
         """Karts still within their launch delay stand (negative throttle reverses); their drivers plan all the
         same."""
-        for k, delay in enumerate(self.conditions.launch_delays):
-            if step * DT < delay:
-                actions[self.index, k] = (0.0, 0.0)
+        actions[self.index, ~self.conditions.launched(step)] = 0.0
 
     def with_imprecision(self, world: World, commands: np.ndarray, step: int) -> np.ndarray:
         """What the karts get of the drivers' ``commands`` (K, 2) this step: the commands, with the drivers'
         imprecision added for karts that have launched and not finished."""
         if self.imprecision is None:
             return commands
-        launched = np.array([step * DT >= delay for delay in self.conditions.launch_delays])
         racing = world.istate[self.index, :, st.I_FINISHED] == 0
-        return self.imprecision.perturb(commands, launched & racing)
+        return self.imprecision.perturb(commands, self.conditions.launched(step) & racing)
 
     def after_step(self, world: World, actions: np.ndarray, step: int, on_step: RacesHook | None) -> None:
         """Note the step's laps, tell ``on_step`` and record the replay."""

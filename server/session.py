@@ -349,9 +349,8 @@ class RaceSession:
     def _apply_conditions(self, step: int) -> None:
         """The race conditions on the AI karts' commands: each stands until its launch delay, then its commands get
         the drivers' imprecision (a human's launch and hands are their own)."""
-        drawn = self._conditions
         ai = np.array([not d.human for d in self.drivers])
-        waiting = ai & (np.array(drawn.launch_delays) > step * DT)
+        waiting = ai & ~self._conditions.launched(step)
         self._actions[0, waiting] = 0.0
         if self._hands is not None:
             racing = self.world is not None and self.world.istate[0, :, st.I_FINISHED] == 0

@@ -52,6 +52,10 @@ class RaceConditions:
     noise_time: float  # [s] correlation time of the noise
     noise_seed: int  # seeds the noise's stream (:class:`Imprecision`)
 
+    def launched(self, step: int) -> np.ndarray:
+        """(K,) whether each kart's launch delay has passed at simulation step ``step`` (it drives from then on)."""
+        return step * DT >= np.asarray(self.launch_delays)
+
     @property
     def imprecise(self) -> bool:
         """Whether the drivers' commands get noise."""
