@@ -295,7 +295,8 @@ def _backend_races(
     raise ValueError(f"unknown backend {backend!r}; known: {BACKENDS}")
 
 
-def _start_method() -> str:
+def start_method() -> str:
+    """How worker processes start: a fork server where there is one (a clean process, quick to fork), else spawn."""
     return "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
 
 
@@ -319,7 +320,7 @@ def _process_races(
     runs)."""
     if not jobs:
         return
-    context = multiprocessing.get_context(_start_method())
+    context = multiprocessing.get_context(start_method())
     queue = list(reversed(jobs))
     runs: dict[int, int] = {}  # first job index of a chunk -> runs started
     slots = [_worker_pool(context) for _ in range(min(workers, len(jobs)))]

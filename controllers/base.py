@@ -25,11 +25,12 @@ class RaceContext:
     """What a controller learns when a race starts."""
 
     track: Track
-    kart: KartParams
+    kart: KartParams  # the kart it drives: the race's reference kart at ``pace``
     ego: int  # index of the kart it drives
     n_karts: int
     lane_change_limit: int
     seed: int
+    pace: float = 1.0  # the kart's pace handicap (sim_core.params.KartParams.paced)
 
 
 @runtime_checkable

@@ -12,7 +12,7 @@ from typing import Any, Protocol, cast, runtime_checkable
 import numpy as np
 
 from controllers.base import Action, Controller, PlanningDriver, RaceContext
-from controllers.registry import make_agent
+from controllers.registry import agent_pace, make_agent
 from controllers.replay import Replay, ReplayRecorder, apply_plan_targets
 from sim_core import state as st
 from sim_core.conditions import ConditionSet, Imprecision, RaceConditions, condition_set
@@ -22,6 +22,16 @@ from sim_core.params import DT, SimParams, kart_preset
 from sim_core.track import Track
 from sim_core.track_io import get_track, load_track
 from sim_core.world import RaceResult, World
+
+
+@dataclass(frozen=True)
+class Placement:
+    """Where a kart starts instead of its grid slot: at centre-line progress ``progress`` [m] (on its first lap),
+    in ``lane``, rolling at ``speed`` [m/s] along the track (a scenario's start, :mod:`arena.scenarios`)."""
+
+    progress: float
+    lane: int
+    speed: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -39,9 +49,12 @@ class RaceSpec:
     time_limit: float | None = None  # [s] end the race then (None: the rules' limit)
     # a named set of sim_core.conditions.CONDITION_SETS ("paper": the original's, "varied"), or a set of one's own
     conditions: str | ConditionSet = "paper"
+    placements: tuple[Placement, ...] | None = None  # one per kart: placed karts instead of the grid
 
     def __post_init__(self) -> None:
         self.condition_set()  # a clear KeyError for an unknown set
+        if self.placements is not None and len(self.placements) != len(self.controllers):
+            raise ValueError(f"need one placement for each of the {len(self.controllers)} karts")
 
     def condition_set(self) -> ConditionSet:
         """The set this race's conditions are drawn from."""
@@ -51,6 +64,10 @@ class RaceSpec:
         """This race's conditions: a function of the seed, the number of karts and the start lanes alone, so two
         series with the same seeds and different drivers meet the same conditions (a paired comparison)."""
         return self.condition_set().draw(self.seed, len(self.controllers), self.start_lanes)
+
+    def kart_paces(self) -> tuple[float, ...]:
+        """Each kart's pace handicap, from its agent string (``NAME@PACE``; 1 without)."""
+        return tuple(agent_pace(a) for a in self.controllers)
 
 
 @dataclass(frozen=True)
@@ -243,7 +260,10 @@ class _Race:
             start_lanes=spec.start_lanes,
             wear=conditions.start_wear,
             start_offsets=conditions.start_offsets,
+            paces=spec.kart_paces(),
         )
+        if spec.placements is not None:
+            _place(world, index, spec.placements, conditions.start_wear)
         if drivers is None:
             drivers = [make_agent(name) for name in spec.controllers]
         elif len(drivers) != n:
@@ -253,7 +273,9 @@ class _Race:
         for k, driver in enumerate(drivers):
             if (planner := planning[k]) is not None:
                 planner.plan_latency = spec.plan_latency
-            driver.reset(RaceContext(track, params.kart, k, n, world.lane_change_limit, spec.seed * 1000 + k))
+            kart = world.kart_params(index, k)  # at its pace: a driver plans with the kart it has
+            pace = float(world.paces[index, k])
+            driver.reset(RaceContext(track, kart, k, n, world.lane_change_limit, spec.seed * 1000 + k, pace))
         recorder = ReplayRecorder(track.name, n) if record else None
         if recorder is not None:
             recorder.allocate(round(params.rules.time_limit / DT) + 1)
@@ -317,6 +339,16 @@ class _Race:
         return RaceOutcome(
             self.spec, world.result(self.index), self.wall, replay, self.laps.all_lap_times(), self.conditions
         )
+
+
+def _place(world: World, race: int, placements: Sequence[Placement], wear: Sequence[float]) -> None:
+    """Move race ``race``'s karts from the grid to ``placements`` (rolling along the track's direction)."""
+    track = world.track
+    for k, placed in enumerate(placements):
+        section = int(np.searchsorted(track.checkpoint_s, placed.progress % track.length, side="right")) - 1
+        d = float(track.lane_offsets(section % track.n_checkpoints)[placed.lane - 1])
+        world.place_kart(race, k, s=placed.progress, d=d, speed=placed.speed, wear=wear[k])
+    world.sense(race)
 
 
 def _show_plan(

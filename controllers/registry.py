@@ -53,6 +53,7 @@ from controllers.lq.presets import fixed_line_tracker, mcts_tracker
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
 from controllers.rl.agents import E2EParams, FixedRLParams, MCTSRLParams, build_e2e, build_fixed_rl, build_mcts_rl
 from controllers.tactical.high_level import HOLD_GAIN, MCTSPlanner, TacticalParams
+from sim_core.params import MIN_PACE
 
 P = TypeVar("P")
 
@@ -126,7 +127,8 @@ class FixedLQNGParams:
     lqng_horizon_steps: int = parameter(4, LQNG_HORIZON_HELP, minimum=1, maximum=25)
     speed_scale: float = parameter(
         1.0,
-        "fraction of its speed targets it drives at (under 1: a slower, handicapped kart)",
+        "fraction of its speed targets it drives at (a driver holding back; a slower kart is a pace handicap, "
+        "fixed-lqng@0.95)",
         minimum=0.5,
         maximum=1.0,
     )
@@ -234,15 +236,39 @@ def make_controller(name: str, **overrides: object) -> Controller:
 
 
 # an agent is a registered name, or a name with parameters: ``mcts-lqng:hold_gain_s=0:iterations=500``
-# (what tournaments and headless races take, where one string names a driver)
+# (what tournaments and headless races take, where one string names a driver); ``@PACE`` at the end drives its kart
+# at a pace handicap (``fixed-lqng@0.95``: sim_core.params.KartParams.paced)
 AGENT_SEPARATOR = ":"
+PACE_SEPARATOR = "@"
+
+
+def agent_pace(agent: str) -> float:
+    """The pace an agent string asks its kart to drive at: ``NAME...@PACE``, a ratio in [``MIN_PACE``, 1] (1
+    without ``@``). ``ValueError`` for a pace that is not a number in that range."""
+    _, at, text = agent.rpartition(PACE_SEPARATOR)
+    if not at:
+        return 1.0
+    try:
+        pace = float(text)
+    except ValueError:
+        raise ValueError(f"agent {agent!r}: pace {text!r} after {PACE_SEPARATOR!r} is not a number") from None
+    if not MIN_PACE <= pace <= 1.0:
+        raise ValueError(f"agent {agent!r}: pace must be in [{MIN_PACE:g}, 1], got {pace:g}")
+    return pace
+
+
+def without_pace(agent: str) -> str:
+    """The agent string without its ``@PACE`` (the driver; the pace is its kart's)."""
+    return agent.rpartition(PACE_SEPARATOR)[0] if PACE_SEPARATOR in agent else agent
 
 
 def parse_agent(agent: str) -> tuple[str, dict[str, object]]:
-    """The controller name and parameter overrides of an agent string ``NAME[:KEY=VALUE]...``; each value is read
-    as JSON where it parses (``3``, ``0.5``, ``true``) and as text otherwise. ``ValueError`` for a part without
-    ``=`` or a key given twice (names and values are checked by :func:`validate_agent`)."""
-    name, *settings = agent.split(AGENT_SEPARATOR)
+    """The controller name and parameter overrides of an agent string ``NAME[:KEY=VALUE]...[@PACE]``; each value is
+    read as JSON where it parses (``3``, ``0.5``, ``true``) and as text otherwise. ``ValueError`` for a part without
+    ``=``, a key given twice or a bad pace (names and values are checked by :func:`validate_agent`; the pace is
+    :func:`agent_pace`'s)."""
+    agent_pace(agent)
+    name, *settings = without_pace(agent).split(AGENT_SEPARATOR)
     overrides: dict[str, object] = {}
     for setting in settings:
         key, equals, text = setting.partition("=")

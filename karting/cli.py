@@ -19,6 +19,7 @@ from typer.core import TyperCommand
 
 from karting.output import add_row, console, error, print_json, table
 from karting.reproduce_cli import app as reproduce_app
+from karting.scenarios_cli import app as scenarios_app
 from karting.tournament_cli import app as tournament_app
 from server.limits import MAX_KARTS, MIN_KARTS
 from sim_core.track_io import TrackFormatError, builtin_track_names, get_track, import_centreline_csv, save_track
@@ -29,6 +30,7 @@ if TYPE_CHECKING:
 app = typer.Typer(help="HeadToHead Karting: head-to-head autonomous kart racing with rules.", no_args_is_help=True)
 app.add_typer(tournament_app, name="tournament")
 app.add_typer(reproduce_app, name="reproduce")
+app.add_typer(scenarios_app, name="scenarios")
 
 JsonOption = Annotated[bool, typer.Option("--json", help="print one JSON object (the last line) instead of tables")]
 
@@ -65,6 +67,9 @@ def import_track(
     csv_path: Annotated[Path, typer.Argument(help="centre line CSV: x_m,y_m,w_tr_right_m,w_tr_left_m")],
     out: Annotated[Path, typer.Option(help="where to write the track JSON")],
     scale: Annotated[float, typer.Option(help="multiply coordinates and widths by this")] = 1.0,
+    width_scale: Annotated[
+        float | None, typer.Option(help="multiply the widths by this instead (a kart-sized circuit wider)")
+    ] = None,
     name: Annotated[str | None, typer.Option(help="track name (default: file stem)")] = None,
     laps: Annotated[int, typer.Option(min=1)] = 3,
     lane_change_limit: Annotated[int, typer.Option(min=0)] = 4,
@@ -72,7 +77,9 @@ def import_track(
 ) -> None:
     """Import a racetrack-database CSV centre line as a track file."""
     try:
-        track = import_centreline_csv(csv_path, name=name, scale=scale, laps=laps, lane_change_limit=lane_change_limit)
+        track = import_centreline_csv(
+            csv_path, name=name, scale=scale, width_scale=width_scale, laps=laps, lane_change_limit=lane_change_limit
+        )
     except (TrackFormatError, ValueError) as exc:
         error(str(exc))
         raise typer.Exit(2) from None

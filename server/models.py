@@ -10,7 +10,7 @@ from dataclasses import fields
 from datetime import datetime
 from typing import TYPE_CHECKING, Annotated, Any, Literal, get_type_hints
 
-from pydantic import BaseModel, ConfigDict, Field, StringConstraints, create_model
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StringConstraints, create_model
 
 from server.drive_events import DRIVE_EVENT_KINDS
 from server.limits import (
@@ -28,6 +28,7 @@ from server.limits import (
 from server.race_config import ParamValue
 from server.results import DriverFaults, record_name
 from server.status import RaceStatus
+from sim_core.params import MIN_PACE
 from sim_core.world import KartResult
 from web.frame import KartFrame
 
@@ -44,6 +45,13 @@ BoundedParamValue = (
     | Annotated[float, Field(allow_inf_nan=False)]
     | Annotated[str, StringConstraints(max_length=MAX_PARAM_TEXT)]
 )
+
+
+def _not_a_bool(value: object) -> object:
+    """JSON's true and false are not integers (pydantic's lax mode would read them as 1 and 0)."""
+    if isinstance(value, bool):
+        raise ValueError("must be an integer, not a boolean")
+    return value
 
 
 class ErrorOut(BaseModel):
@@ -91,6 +99,13 @@ class KartIn(BaseModel):
         max_length=MAX_PARAMS,
         description="controller parameters to change (names from GET /api/controllers)",
     )
+    pace: float = Field(
+        1.0,
+        ge=MIN_PACE,
+        le=1.0,
+        description="pace handicap: the kart's speed limits times this and its accelerations times its square, so "
+        "that it drives the same line this much slower (1: the race's kart); a human can race a handicapped AI",
+    )
 
 
 class RaceIn(BaseModel):
@@ -103,7 +118,7 @@ class RaceIn(BaseModel):
         None, ge=MIN_LAPS, le=MAX_LAPS, description="default: the track's laps; at most GET /api/limits"
     )
     seed: int = Field(0, ge=0, le=MAX_SEED, description="seed of the planners")
-    start_lanes: list[Annotated[int, Field(ge=1, le=MAX_LANES)]] | None = Field(
+    start_lanes: list[Annotated[int, Field(ge=1, le=MAX_LANES), BeforeValidator(_not_a_bool)]] | None = Field(
         None,
         min_length=1,
         max_length=MAX_KARTS,

@@ -18,12 +18,14 @@ ParamValue = bool | int | float | str  # a controller parameter's value, as a ra
 @dataclass(frozen=True)
 class KartEntry:
     """One kart of a race: grid slot, display name, controller (registered name or ``human``) and the
-    controller's parameters that differ from its defaults."""
+    controller's parameters that differ from its defaults, and the kart's pace handicap
+    (:meth:`sim_core.params.KartParams.paced`: 1 is the race's kart, 0.95 one 5% slower on the same line)."""
 
     index: int
     name: str
     controller: str
     params: Mapping[str, ParamValue] = field(default_factory=dict)
+    pace: float = 1.0
 
     @property
     def human(self) -> bool:
@@ -31,13 +33,20 @@ class KartEntry:
         return self.controller == HUMAN
 
     def to_json(self) -> dict[str, Any]:
-        """``{index, name, controller, params}`` (as stored with the race)."""
-        return {"index": self.index, "name": self.name, "controller": self.controller, "params": dict(self.params)}
+        """``{index, name, controller, params, pace}`` (as stored with the race)."""
+        return {
+            "index": self.index,
+            "name": self.name,
+            "controller": self.controller,
+            "params": dict(self.params),
+            "pace": self.pace,
+        }
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> KartEntry:
-        """Read back :meth:`to_json` (races stored before parameters existed have none)."""
-        return cls(int(data["index"]), str(data["name"]), str(data["controller"]), dict(data.get("params") or {}))
+        """Read back :meth:`to_json` (races stored before parameters or paces existed have none, and pace 1)."""
+        params = dict(data.get("params") or {})
+        return cls(int(data["index"]), str(data["name"]), str(data["controller"]), params, float(data.get("pace", 1.0)))
 
 
 @dataclass(frozen=True)

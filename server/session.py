@@ -217,7 +217,15 @@ class RaceSession:
         n = len(self.drivers)
         limit = world.lane_change_limit
         contexts = {
-            d.index: RaceContext(config.track, params.kart, d.index, n, limit, config.seed * 1000 + d.index)
+            d.index: RaceContext(
+                config.track,
+                world.kart_params(0, d.index),  # at the kart's pace
+                d.index,
+                n,
+                limit,
+                config.seed * 1000 + d.index,
+                float(world.paces[0, d.index]),
+            )
             for d in self.drivers
             if not d.human
         }
@@ -239,7 +247,10 @@ class RaceSession:
         config = self.config
         world = World(config.track, 1, len(self.drivers), params, laps=config.laps)
         drawn = self._conditions
-        world.reset(start_lanes=config.start_lanes, wear=drawn.start_wear, start_offsets=drawn.start_offsets)
+        paces = [d.entry.pace for d in self.drivers]  # each kart's pace handicap, a human's too
+        world.reset(
+            start_lanes=config.start_lanes, wear=drawn.start_wear, start_offsets=drawn.start_offsets, paces=paces
+        )
         return world
 
     async def _open_scene(self) -> None:

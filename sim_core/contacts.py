@@ -42,7 +42,7 @@ def resolve_contacts(
 ) -> None:
     """Push every kart of race ``b`` out of the walls and the other karts. Sets ``scratch.wall_touch``,
     ``contact`` (any round), ``first_touch`` and ``front`` (the first round: the referee charges faults from
-    the contacts as the karts arrived, before the pushes moved them)."""
+    the contacts as the karts arrived, before the pushes moved them). ``kp``: each kart's parameters (K, P)."""
     F, I = w.F, w.I
     K = F.shape[1]
     dt = rp[RP_DT]
@@ -60,7 +60,7 @@ def resolve_contacts(
     any_pair = False
     for rnd in range(CONTACT_ROUNDS):
         for k in range(K):
-            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp, F, I, b, k, dt, located, heading_before[k]):
+            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp[k], F, I, b, k, dt, located, heading_before[k]):
                 wall_touch[k] = True
         any_pair = False
         for i in range(K):
@@ -82,7 +82,7 @@ def resolve_contacts(
     if any_pair:
         # kart-kart pushes of the last round may have moved a kart into a wall
         for k in range(K):
-            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp, F, I, b, k, dt, located, heading_before[k]):
+            if not I[b, k, I_FINISHED] and _resolve_walls(tr, kp[k], F, I, b, k, dt, located, heading_before[k]):
                 wall_touch[k] = True
 
 
@@ -169,10 +169,11 @@ def _resolve_pair(
 ) -> tuple[bool, bool, bool]:
     """Separate karts i and j if their capsules overlap (symmetric push, inelastic along the normal).
 
-    Returns (in contact, i's front touches j, j's front touches i).
+    Returns (in contact, i's front touches j, j's front touches i). ``kp``: each kart's parameters (K, P); the
+    bodies are the same size for every kart.
     """
-    hl = kp[P_HALF_LENGTH]
-    r = kp[P_RADIUS]
+    hl = kp[i, P_HALF_LENGTH]
+    r = kp[i, P_RADIUS]
     xi, yi, hi = F[b, i, F_X], F[b, i, F_Y], F[b, i, F_HEADING]
     xj, yj, hj = F[b, j, F_X], F[b, j, F_Y], F[b, j, F_HEADING]
     if (xi - xj) ** 2 + (yi - yj) ** 2 > (2.0 * (hl + r) + margin) ** 2:
@@ -218,7 +219,6 @@ def _resolve_pair(
             uix, uiy = vi * ci - 0.5 * closing * nx, vi * si_ - 0.5 * closing * ny
             ujx, ujy = vj * cj + 0.5 * closing * nx, vj * sj_ + 0.5 * closing * ny
             # a push never takes a kart past its own speed limits
-            top, reverse = kp[P_TOP_SPEED], -kp[P_REVERSE_SPEED]
-            F[b, i, F_SPEED] = min(max(uix * ci + uiy * si_, reverse), top)
-            F[b, j, F_SPEED] = min(max(ujx * cj + ujy * sj_, reverse), top)
+            F[b, i, F_SPEED] = min(max(uix * ci + uiy * si_, -kp[i, P_REVERSE_SPEED]), kp[i, P_TOP_SPEED])
+            F[b, j, F_SPEED] = min(max(ujx * cj + ujy * sj_, -kp[j, P_REVERSE_SPEED]), kp[j, P_TOP_SPEED])
     return True, i_faults, j_faults

@@ -17,6 +17,7 @@ import numpy as np
 SIM_HZ = 50  # [Hz] fixed simulation rate, the same live and headless
 DT = 1.0 / SIM_HZ  # [s] fixed simulation step
 GRAVITY = 9.81  # [m/s^2]
+MIN_PACE = 0.5  # the slowest pace handicap (KartParams.paced): half the reference kart's speed
 
 
 @dataclass(frozen=True)
@@ -79,6 +80,32 @@ class KartParams:
         throttle = np.where(accel >= -drag, forward, braking)
         throttle = np.where((speed <= 1e-3) & (accel <= 0.0), 0.0, throttle)
         return np.clip(throttle, -1.0, 1.0)
+
+    def paced(self, pace: float) -> KartParams:
+        """This kart at ``pace`` (a ratio in [``MIN_PACE``, 1]; 1 is this kart): every speed limit times ``pace``, every
+        acceleration limit (throttle, brakes, drag, grip) times ``pace**2`` and the wall's turning rate times
+        ``pace``. The equations of motion then hold under time scaled by ``1 / pace``: the same inputs drive
+        the same path, ``1 / pace`` times slower (the kart's steering geometry, body and wear per radian of
+        turning are unchanged). The pace handicap of :mod:`sim_core.conditions` and of agent strings
+        ``NAME@PACE``."""
+        if not MIN_PACE <= pace <= 1.0:
+            raise ValueError(f"pace must be in [{MIN_PACE:g}, 1], got {pace:g}")
+        if pace == 1.0:
+            return self
+        speed, accel = pace, pace * pace
+        return replace(
+            self,
+            name=f"{self.name}@{pace:g}",
+            top_speed=self.top_speed * speed,
+            reverse_speed=self.reverse_speed * speed,
+            acceleration=self.acceleration * accel,
+            braking=self.braking * accel,
+            reverse_acceleration=self.reverse_acceleration * accel,
+            coasting_drag=self.coasting_drag * accel,
+            lateral_g_fresh=self.lateral_g_fresh * accel,
+            lateral_g_worn=self.lateral_g_worn * accel,
+            wall_yaw_rate=self.wall_yaw_rate * speed,
+        )
 
     def as_array(self) -> np.ndarray:
         """Parameters packed for the compiled step kernel (order fixed by :data:`KART_PARAM_FIELDS`)."""

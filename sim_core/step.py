@@ -45,7 +45,8 @@ from sim_core.state import (
 
 @njit(**PHASE)
 def drive_karts(b: int, w: WorldArrays, actions: np.ndarray, kp: np.ndarray, dt: float, scratch: StepScratch) -> None:
-    """The dynamics of every unfinished kart of race ``b`` under its action (contacts come after)."""
+    """The dynamics of every unfinished kart of race ``b`` under its action (contacts come after); ``kp`` holds
+    every kart's own parameters (B, K, P)."""
     F, I = w.F, w.I
     for k in range(F.shape[1]):
         I[b, k, I_EVENTS] = 0
@@ -55,7 +56,7 @@ def drive_karts(b: int, w: WorldArrays, actions: np.ndarray, kp: np.ndarray, dt:
             continue
         steer, throttle = actions[b, k, 0], actions[b, k, 1]
         x, y, h, v, slip, yaw_rate, acc = kart_step(
-            kp,
+            kp[b, k],
             F[b, k, F_X],
             F[b, k, F_Y],
             F[b, k, F_HEADING],
@@ -70,7 +71,7 @@ def drive_karts(b: int, w: WorldArrays, actions: np.ndarray, kp: np.ndarray, dt:
         F[b, k, F_SLIP] = slip
         scratch.heading_before[k], scratch.speed_before[k] = h, v
         F[b, k, F_YAW_RATE], F[b, k, F_ACC_YAW] = yaw_rate, acc
-        F[b, k, F_WEAR] = tyre_wear(kp, acc)
+        F[b, k, F_WEAR] = tyre_wear(kp[b, k], acc)
         F[b, k, F_STEER] = min(max(steer, -1.0), 1.0) if steer == steer else 0.0
         F[b, k, F_THROTTLE] = min(max(throttle, -1.0), 1.0) if throttle == throttle else 0.0
 
@@ -93,11 +94,11 @@ def step_race(
     K = w.F.shape[1]
     step = w.R[b, R_STEP]
     drive_karts(b, w, actions, kp, rp[RP_DT], scratch)
-    resolve_contacts(b, w, tr, kp, rp, scratch)
+    resolve_contacts(b, w, tr, kp[b], rp, scratch)
     for k in range(K):
         if not w.I[b, k, I_FINISHED]:
             referee_kart(b, k, w, tr, rp, step, scratch)
-    judge_contacts(b, w, tr, kp, rp, step, scratch)  # headings are final from here on
+    judge_contacts(b, w, tr, kp[b, 0], rp, step, scratch)  # headings are final from here on
     if step % PASS_CHECK_STEPS == 0:  # a pass takes 2 s to count: 10 Hz is plenty
         count_passes(b, w, tr, step, scratch)
     advance_clock(b, w, rp)
@@ -105,7 +106,7 @@ def step_race(
         for k in range(K):  # every kart was located this step (a finished one has not moved since)
             scratch.centre[k, 0] = w.I[b, k, I_CENTRE_IDX]
             scratch.centre[k, 1] = w.F[b, k, F_D]
-        cast_rays(b, w, tr, kp, rp, rays, scratch)
+        cast_rays(b, w, tr, kp[b, 0], rp, rays, scratch)  # bodies: the same size for every kart
 
 
 @njit(**NO_REFCOUNT)  # views and bundles only: nothing to count

@@ -14,7 +14,7 @@ import numpy as np
 
 from sim_core import state as st
 from sim_core.kernel_arrays import scratch_sizes
-from sim_core.params import DT, SimParams
+from sim_core.params import DT, KartParams, SimParams
 from sim_core.rules import race_winner, safety_score
 from sim_core.sensors import prepare_rays, sense_batch
 from sim_core.step import step_batch
@@ -100,7 +100,10 @@ class World:
         self.n_karts = n_karts
         self.sensors = sensors
         self.arrays = track_arrays(track)
-        self.kart_vector = self.params.kart.as_array()
+        self.kart_vector = self.params.kart.as_array()  # the reference kart (bodies, sensors)
+        # every kart's own parameters (B, K, P): the reference kart, or it at a pace (:meth:`set_pace`)
+        self.kart_rows = np.tile(self.kart_vector, (n_races, n_karts, 1))
+        self.paces = np.ones((n_races, n_karts))
         self.rule_vector = self._rule_vector()
         self.ray_angles = self.params.sensors.angles_rad_left_positive()
         n = track.n_checkpoints
@@ -160,13 +163,14 @@ class World:
         start_lanes: tuple[int, ...] | list[int] | None = None,
         wear: float | Sequence[float] | None = None,
         start_offsets: Sequence[float] | None = None,
+        paces: Sequence[float] | None = None,
     ) -> None:
         """Put karts on the starting grid of the given races (all by default), at rest.
 
         The front row stands ``START_OFFSET`` m past checkpoint 0 in ``start_lanes`` (default lanes 2, 3, 1, 4);
         karts 5-8 form a second row behind the line; each kart a further ``start_offsets[k]`` m back (a staggered
-        grid). ``wear``: the start wear of every kart, or one per kart (default the rules'). Every counter is
-        cleared.
+        grid). ``wear``: the start wear of every kart, or one per kart (default the rules'). ``paces``: each kart's
+        pace handicap (:meth:`set_pace`; default 1, the reference kart). Every counter is cleared.
         """
         lanes = tuple(start_lanes) if start_lanes is not None else DEFAULT_START_LANES
         n_lanes = self.track.n_lanes
@@ -180,15 +184,29 @@ class World:
         behind = [0.0] * self.n_karts if start_offsets is None else [float(o) for o in start_offsets]
         if len(wears) != self.n_karts or len(behind) != self.n_karts:
             raise ValueError(f"need one start wear and one start offset for each of the {self.n_karts} karts")
+        kart_paces = [1.0] * self.n_karts if paces is None else [float(p) for p in paces]
+        if len(kart_paces) != self.n_karts:
+            raise ValueError(f"need one pace for each of the {self.n_karts} karts, got {list(kart_paces)}")
         for b in self._race_list(races):
             self.clear_race(b)
             for k in range(self.n_karts):
+                self.set_pace(b, k, kart_paces[k])
                 row, col = divmod(k, 4)
                 lane = lanes[k] if k < len(lanes) else DEFAULT_START_LANES[col]  # as grid_lanes
                 offset = START_OFFSET - ROW_SPACING * row - behind[k]
                 d = float(self.track.lane_offsets(0)[lane - 1])
                 self.place_kart(b, k, s=offset, d=d, wear=wears[k])
         self.sense()
+
+    def set_pace(self, race: int, kart: int, pace: float) -> None:
+        """Drive kart ``kart`` of race ``race`` as the reference kart at ``pace`` (:meth:`KartParams.paced`: speeds
+        times ``pace``, accelerations times ``pace**2``); 1 is the reference kart itself."""
+        self.kart_rows[race, kart] = self.params.kart.paced(pace).as_array()
+        self.paces[race, kart] = pace
+
+    def kart_params(self, race: int, kart: int) -> KartParams:
+        """The parameters kart ``kart`` of race ``race`` drives with (the reference kart at its pace)."""
+        return self.params.kart.paced(float(self.paces[race, kart]))
 
     def clear_race(self, race: int) -> None:
         """Zero every counter of race ``race`` (its karts must then be placed with :meth:`place_kart`)."""
@@ -309,7 +327,7 @@ class World:
             self.pass_start,
             actions,
             self.arrays,
-            self.kart_vector,
+            self.kart_rows,
             self.rule_vector,
             self._rays,
             self.sensors,

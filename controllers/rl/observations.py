@@ -105,8 +105,11 @@ def build_frame(
     plan_speed: np.ndarray,
     accelerating: np.ndarray,
     time_fraction: np.ndarray,
+    speed_unit: float = SPEED_SCALE,
 ) -> np.ndarray:
-    """(B, K, frame) the newest observation frame of every kart.
+    """(B, K, frame) the newest observation frame of every kart, speeds in ``speed_unit`` (the trained one, or
+    for a kart at a pace handicap that times its pace: the kart then sees its own time, in which it drives as
+    the trained kart, :meth:`sim_core.params.KartParams.paced`).
 
     ``world`` needs only ``fstate``, ``istate``, ``ray_dist``, ``lane_change_limit`` and
     ``params.sensors.max_range`` (the race-time tracker passes a one-race stand-in)."""
@@ -124,6 +127,7 @@ def build_frame(
         np.asarray(plan_speed, dtype=np.float64),
         np.asarray(accelerating, dtype=np.float64),
         np.asarray(time_fraction, dtype=np.float64),
+        float(speed_unit),
         out,
     )
     return out
@@ -146,6 +150,7 @@ def _fill_frames(
     plan_speed: np.ndarray,
     accelerating: np.ndarray,
     time_fraction: np.ndarray,
+    speed_unit: float,
     out: np.ndarray,
 ) -> None:
     n_races, n_karts = f.shape[0], f.shape[1]
@@ -155,7 +160,7 @@ def _fill_frames(
     for b in range(n_races):
         for k in range(n_karts):
             o = out[b, k]
-            o[0] = f[b, k, st.F_SPEED] / SPEED_SCALE
+            o[0] = f[b, k, st.F_SPEED] / speed_unit
             o[1] = accelerating[b, k]
             o[2] = float(i[b, k, st.I_LANE_NOW])
             o[3] = float(i[b, k, st.I_STEP_LANE_COUNT]) / float(limit)
@@ -172,7 +177,7 @@ def _fill_frames(
                 q = OWN_FEATURES + OPPONENT_FEATURES * (shift - 1)
                 c_j = i[b, j, st.I_CP_PASSED] % n
                 dx, dy = f[b, j, st.F_X] - x, f[b, j, st.F_Y] - y
-                o[q] = f[b, j, st.F_SPEED] / SPEED_SCALE
+                o[q] = f[b, j, st.F_SPEED] / speed_unit
                 o[q + 1] = accelerating[b, j]
                 o[q + 2] = float(i[b, j, st.I_LANE_NOW])
                 o[q + 3] = float(i[b, j, st.I_STEP_LANE_COUNT]) / float(limit)
@@ -193,7 +198,7 @@ def _fill_frames(
                 o[q] = c * dx + s * dy
                 o[q + 1] = -s * dx + c * dy
                 o[q + 2] = np.hypot(dx, dy)
-                o[q + 3] = plan_speed[b, k, c_t] / SPEED_SCALE
+                o[q + 3] = plan_speed[b, k, c_t] / speed_unit
                 o[q + 4] = straight[(c_t - 1) % n]
             for r in range(ray_dist.shape[2]):
                 o[ray_at + r] = ray_dist[b, k, r] / max_range

@@ -29,7 +29,7 @@ import numpy as np
 from controllers.base import Action, ActionFilter, RaceContext
 from controllers.plan import Plan
 from controllers.rl.actions import ACCELERATE, world_actions
-from controllers.rl.config import DECISION_STEPS, EPISODE_STEPS, STACK, AgentKind
+from controllers.rl.config import DECISION_STEPS, EPISODE_STEPS, SPEED_SCALE, STACK, AgentKind
 from controllers.rl.observations import TrackTables, build_frame, frame_size, place_phantoms
 from controllers.rl.policy import Policy, load_policy, weights_folder
 from controllers.rl.spawns import racing_lane_at_checkpoints
@@ -162,9 +162,14 @@ class RLTracker:
         n_cp = self.tables.n_checkpoints
         if me.checkpoints_passed > 0 and me.checkpoints_passed % n_cp == 0 and me.crossing_time > self.lap_start:
             self.lap_start = me.crossing_time
-        time_fraction = np.array([min((observation.time - self.lap_start) / LAP_TIME_SCALE, 1.0)])
+        # a kart at a pace handicap sees its own time (speeds over pace x the trained unit, times times pace), in
+        # which it drives as the trained kart does
+        pace = self._ctx.pace if self._ctx is not None else 1.0
+        time_fraction = np.array([min((observation.time - self.lap_start) * pace / LAP_TIME_SCALE, 1.0)])
         world = cast(World, self.snap)
-        frames = build_frame(world, self.tables, self.plan_lane, self.plan_speed, self.accelerating, time_fraction)
+        frames = build_frame(
+            world, self.tables, self.plan_lane, self.plan_speed, self.accelerating, time_fraction, SPEED_SCALE * pace
+        )
         return frames[0, 0]
 
     def _snapshot(self, observation: Observation) -> None:

@@ -93,7 +93,9 @@ def race_config(body: RaceIn, catalogue: Mapping[str, ControllerSpec], max_laps:
         problem(("karts", i, "name"), msg, body.karts[i].name)
     if errors or track is None:
         raise RequestValidationError(errors)
-    karts = tuple(KartEntry(i, names[i], kart.controller, dict(kart.params)) for i, kart in enumerate(body.karts))
+    karts = tuple(
+        KartEntry(i, names[i], kart.controller, dict(kart.params), kart.pace) for i, kart in enumerate(body.karts)
+    )
     return RaceConfig(
         track_name=body.track,
         track=track,

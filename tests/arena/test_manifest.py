@@ -37,7 +37,7 @@ from sim_core.conditions import condition_set
 from sim_core.params import kart_preset
 from sim_core.track_io import get_track
 
-SLOW = "fixed-lqng:speed_scale=0.7"
+SLOW = "fixed-lqng:line_margin_m=1.5"
 # one pair, one track, one lap, a short time limit (a race takes well under a second)
 SMALL = TournamentSpec(agents=(SLOW, "lane-follower"), tracks=("oval",), races_per_pair=2, laps=1, time_limit=30.0)
 
@@ -66,7 +66,7 @@ def test_a_stored_tournament_and_its_races_list_every_parameter_and_the_conditio
     assert stored is not None and stored.manifest is not None
     manifest = stored.manifest
     check_agents(manifest, SMALL.agents)
-    assert manifest.agents[0].parameters["speed_scale"] == 0.7  # the override, every other value the default
+    assert manifest.agents[0].parameters["line_margin_m"] == 1.5  # the override, every other value the default
     assert manifest.kind == "tournament" and manifest.commit and manifest.kart_preset == "paper"
     assert manifest.kart["top_speed"] > 0 and manifest.machine["cpus"]
     conditions = manifest.conditions
@@ -85,7 +85,7 @@ def test_a_stored_tournament_and_its_races_list_every_parameter_and_the_conditio
         shown = ResultOut.model_validate(race.result.to_json()).model_dump()
         assert shown["manifest"]["agents"][0]["full"] == manifest.agents[0].full
     view = _view(stored, False).model_dump()["manifest"]
-    assert view is not None and view["agents"][0]["parameters"]["speed_scale"] == 0.7
+    assert view is not None and view["agents"][0]["parameters"]["line_margin_m"] == 1.5
     assert view["conditions"] == dict(conditions)
 
 
@@ -172,11 +172,11 @@ def test_agent_strings_with_every_parameter_read_back_as_written() -> None:
 
 
 def test_a_live_race_and_a_headless_race_carry_their_manifests() -> None:
-    karts = (KartEntry(0, "a", "fixed-lqng", {"speed_scale": 0.8}), KartEntry(1, "me", "human"))
+    karts = (KartEntry(0, "a", "fixed-lqng", {"line_margin_m": 0.8}), KartEntry(1, "me", "human"))
     config = RaceConfig("oval", get_track("oval"), 2, 4, None, "paper", karts)
     manifest = live_race_manifest(config, 0.3, REGISTRY)
-    assert manifest is not None and [a.agent for a in manifest.agents] == ["fixed-lqng:speed_scale=0.8", "human"]
-    assert manifest.agents[0].parameters == every_parameter("fixed-lqng:speed_scale=0.8")
+    assert manifest is not None and [a.agent for a in manifest.agents] == ["fixed-lqng:line_margin_m=0.8", "human"]
+    assert manifest.agents[0].parameters == every_parameter("fixed-lqng:line_margin_m=0.8")
     assert manifest.conditions["start_lanes"] == [2, 3] and manifest.conditions["plan_budget_s"] == 0.3
     assert live_race_manifest(config, 0.3, {}) is None  # a controller it cannot describe: no manifest, no error
     args = ["race", "--karts", "fixed-lqng,lane-follower:lookahead_time=0.5", "--laps", "1", "--seed", "2", "--json"]

@@ -59,9 +59,9 @@ def test_a_spec_names_every_problem() -> None:
 
 
 def test_an_agent_with_parameters_races_as_its_own_agent_with_them() -> None:
-    """``fixed-lqng:speed_scale=0.7`` is fixed-lqng driving at 70% of its speed targets: a different agent in the
-    tournament, which the same controller as registered beats on the line from either start lane."""
-    slow = "fixed-lqng:speed_scale=0.7"
+    """``fixed-lqng@0.7`` is fixed-lqng driving a kart at a pace handicap of 0.7: a different agent in the
+    tournament, which the same controller at full pace beats on the line from either start lane."""
+    slow = "fixed-lqng@0.7"
     spec = TournamentSpec(agents=("fixed-lqng", slow), tracks=("oval",), races_per_pair=2, laps=1, seed=3)
     assert spec.problems() == {}
     store = MemoryStore()
@@ -75,8 +75,10 @@ def test_an_agent_with_parameters_races_as_its_own_agent_with_them() -> None:
     # the paper's E2E races with a planner in the background for its Δr and Δv: with parameters too
     variant = TournamentSpec(agents=("e2e:deterministic=false", "fixed-lqng"), tracks=("oval",), races_per_pair=1)
     assert variant.jobs()[0].background_planners == ("e2e:deterministic=false",)
-    bad = TournamentSpec(agents=("fixed-lqng", "fixed-lqng:speed_scale=0.1")).problems()["agents"]
-    assert "'speed_scale' = 0.1 is below its minimum 0.5" in bad
+    bad = TournamentSpec(agents=("fixed-lqng", "fixed-lqng:line_margin_m=0.1")).problems()["agents"]
+    assert "'line_margin_m' = 0.1 is below its minimum 0.5" in bad
+    slower = TournamentSpec(agents=("fixed-lqng", "fixed-lqng@0.1")).problems()["agents"]
+    assert "pace must be in [0.5, 1], got 0.1" in slower
 
 
 def test_the_conditions_reach_every_race_paired_across_pairs_and_old_specs_read_back_as_paper() -> None:

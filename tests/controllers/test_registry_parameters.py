@@ -114,9 +114,9 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
     assert rl.planner.hold_gain is None  # every plan chosen afresh (mcts-lqng's pass commitment is its own)
     assert rl.planner.pace_model and rl.planner.own_pace == 1.0
     assert not rl.planner.planned_speeds_behind  # its KeepDistance filter keeps the distance
-    slowed = make_controller("fixed-lqng", speed_scale=0.9)
-    assert isinstance(slowed, HierarchicalController) and isinstance(slowed.tracker, LQNGTracker)
-    assert slowed.tracker.params.speed_scale == 0.9 and make_controller("fixed-lqng").tracker.params.speed_scale == 1.0  # type: ignore[attr-defined]
+    narrow = make_controller("fixed-lqng", lqng_horizon_steps=9)
+    assert isinstance(narrow, HierarchicalController) and isinstance(narrow.tracker, LQNGTracker)
+    assert narrow.tracker.params.horizon == 9 and make_controller("fixed-lqng").tracker.params.horizon == 4  # type: ignore[attr-defined]
     for name in ("mcts-rl", "fixed-rl"):
         shielded = make_controller(name, speed_ceiling_margin_mps=2.0, keep_distance_lookahead_s=0.4)
         assert isinstance(shielded, HierarchicalController) and isinstance(shielded.tracker, RLTracker)
@@ -260,7 +260,13 @@ def test_parameters_of_reads_types_and_bounds_from_the_fields() -> None:
     [
         ("mcts-lqng", "mcts-lqng", {}),
         ("mcts-lqng:iterations=500", "mcts-lqng", {"iterations": 500}),
-        ("fixed-lqng:speed_scale=0.8:line_margin_m=1.5", "fixed-lqng", {"speed_scale": 0.8, "line_margin_m": 1.5}),
+        (
+            "fixed-lqng:lqng_horizon_steps=8:line_margin_m=2",
+            "fixed-lqng",
+            {"lqng_horizon_steps": 8, "line_margin_m": 2},
+        ),
+        ("fixed-lqng:line_margin_m=1.5@0.95", "fixed-lqng", {"line_margin_m": 1.5}),  # the pace is the kart's
+        ("mcts-rl@0.9", "mcts-rl", {}),
         ("e2e:deterministic=false", "e2e", {"deterministic": False}),
         ("x:label=fast", "x", {"label": "fast"}),  # not JSON: kept as text (the parameter's check judges it)
     ],
@@ -273,10 +279,13 @@ def test_an_agent_string_is_a_name_and_its_parameters(agent: str, name: str, ove
     ("agent", "error", "says"),
     [
         ("schumacher", KeyError, "unknown controller"),
-        ("fixed-lqng:speed_scale", ValueError, "is not KEY=VALUE"),
+        ("fixed-lqng:line_margin_m", ValueError, "is not KEY=VALUE"),
         ("fixed-lqng:=1", ValueError, "is not KEY=VALUE"),
-        ("fixed-lqng:speed_scale=0.8:speed_scale=0.9", ValueError, "given twice"),
-        ("fixed-lqng:speed_scale=fast", ParameterError, "must be a float"),
+        ("fixed-lqng:line_margin_m=0.8:line_margin_m=0.9", ValueError, "given twice"),
+        ("fixed-lqng:line_margin_m=fast", ParameterError, "must be a float"),
+        ("fixed-lqng@fast", ValueError, "is not a number"),
+        ("fixed-lqng@1.2", ValueError, r"pace must be in \[0.5, 1\]"),
+        ("fixed-lqng@0.3", ValueError, r"pace must be in \[0.5, 1\]"),
         ("mcts-lqng:horizon=17", ParameterError, "above its maximum"),
         ("mcts-lqng:temperature=3", ParameterError, "unknown"),
     ],

@@ -108,12 +108,12 @@ def test_unknown_controllers_and_tracks_exit_with_2() -> None:
     assert unknown.exit_code == 2 and "nope" in unknown.output
     missing = runner.invoke(app, ["race", "--track", "no/such/track.json", "--karts", "lane-follower"])
     assert missing.exit_code == 2
-    bad = runner.invoke(app, ["race", "--karts", "lane-follower,fixed-lqng:speed_scale=3"])
+    bad = runner.invoke(app, ["race", "--karts", "lane-follower,fixed-lqng:line_margin_m=9"])
     assert bad.exit_code == 2 and "above its maximum" in bad.output
 
 
 def test_a_kart_given_parameters_races_with_them() -> None:
-    """``fixed-lqng:speed_scale=0.6`` drives at 60% of its speed targets: a lap of it takes longer."""
+    """``fixed-lqng@0.6`` drives its kart at a pace handicap of 0.6: a lap of it takes longer."""
     done = runner.invoke(
         app,
         [
@@ -121,7 +121,7 @@ def test_a_kart_given_parameters_races_with_them() -> None:
             "--track",
             "train-oval-small",
             "--karts",
-            "fixed-lqng,fixed-lqng:speed_scale=0.6",
+            "fixed-lqng,fixed-lqng@0.6",
             "--laps",
             "1",
             "--json",

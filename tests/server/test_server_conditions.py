@@ -47,3 +47,15 @@ def test_an_unknown_set_is_a_422_naming_the_field(client: httpx.Client) -> None:
     response = client.post("/api/races", json={"track": "oval", "conditions": "wet", "karts": [{"controller": "e2e"}]})
     assert response.status_code == 422
     assert response.json()["detail"][0]["loc"] == ["body", "conditions"]
+
+
+def test_a_kart_races_at_its_pace_handicap_and_a_bad_pace_is_a_422(client: httpx.Client) -> None:
+    """Kart 1 at pace 0.8 never goes faster than 0.8 of the kart's top speed; kart 0 does."""
+    karts = [{"controller": "lane-follower"}, {"controller": "lane-follower", "pace": 0.8}]
+    race = start_race(client, track="oval", laps=1, seed=SEED, karts=karts)
+    wait_status(client, race["id"], ("finished",), 120)
+    poses = np.asarray(client.get(f"/api/races/{race['id']}/replay").json()["poses"])
+    assert poses[:, 1, 3].max() <= 0.8 * 15.0 + 1e-9 < poses[:, 0, 3].max()
+    bad = client.post("/api/races", json={"track": "oval", "karts": [{"controller": "e2e", "pace": 0.2}]})
+    assert bad.status_code == 422
+    assert bad.json()["detail"][0]["loc"] == ["body", "karts", 0, "pace"]

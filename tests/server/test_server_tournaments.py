@@ -35,7 +35,7 @@ def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[httpx.Client]:
         ({"agents": ["fixed-lqng", "schumacher"]}, ["body", "agents"], "unknown agents ['schumacher']"),
         ({"tracks": ["monza"]}, ["body", "tracks"], "unknown tracks ['monza']"),
         ({"agents": ["e2e", "e2e"]}, ["body", "agents"], "two or more different agents"),
-        ({"agents": ["e2e", "fixed-lqng:speed_scale=2"]}, ["body", "agents"], "'speed_scale' = 2.0 is above"),
+        ({"agents": ["e2e", "fixed-lqng:line_margin_m=9"]}, ["body", "agents"], "'line_margin_m' = 9.0 is above"),
         ({"agents": ["e2e", "fixed-lqng:pace=1"]}, ["body", "agents"], "'pace' is unknown"),
         ({"agents": ["e2e", "fixed-lqng:fast"]}, ["body", "agents"], "'fast' is not KEY=VALUE"),
         ({"races_per_pair": 0}, ["body", "races_per_pair"], "greater than or equal to 1"),

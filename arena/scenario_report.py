@@ -1,0 +1,78 @@
+"""The tactics suite's reports: a run's summary (:meth:`arena.scenarios.SuiteResult.to_json`) as table rows and
+Markdown, and published with its manifest into a results folder (``karting scenarios run --publish``)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from arena.manifest import build_manifest, describe_agent
+from controllers.registry import without_pace
+from sim_core.conditions import condition_set
+
+SUMMARY_FILE, REPORT_FILE, MANIFEST_FILE = "summary.json", "README.md", "manifest.json"
+
+
+def _interval(ci: list[float] | None) -> str:
+    return "" if ci is None else f" [{ci[0]:.2f}, {ci[1]:.2f}]"
+
+
+def cell_row(cell: dict[str, Any]) -> list[str]:
+    """One summary cell (:meth:`CellFigures.to_json`) as table text: scenario, track, ego, opponent, pace, attempts,
+    success with its interval, time to pass, collisions at fault and illegal lane changes per attempt."""
+    to_pass = "" if cell["time_to_pass"] is None else f"{cell['time_to_pass']:.1f}"
+    return [
+        cell["scenario"],
+        cell["track"],
+        cell["ego"],
+        cell["opponent"],
+        f"{cell['pace']:g}",
+        str(cell["attempts"]),
+        f"{cell['pass_success']:.2f}{_interval(cell['ci95'])}",
+        to_pass,
+        f"{cell['collisions_at_fault_per_attempt']:.2f}{_interval(cell['collisions_ci95'])}",
+        f"{cell['illegal_lane_changes_per_attempt']:.2f}{_interval(cell['illegal_lane_changes_ci95'])}",
+    ]
+
+
+def markdown_report(summary: dict[str, Any], wall_seconds: float | None = None) -> str:
+    """A stored run (:meth:`SuiteResult.to_json`) as Markdown tables."""
+    head = ["scenario", "track", "ego", "opponent", "pace", "attempts", "success [95% CI]", "time to pass [s]",
+            "collisions at fault / attempt", "illegal lane changes / attempt"]  # fmt: skip
+    lines = [
+        f"# Scenarios: {summary['attempts']} attempts per cell, seed {summary['seed']}",
+        "",
+        "Regenerate: `karting scenarios run "
+        + summary.get("command", "...")
+        + "`"
+        + ("" if wall_seconds is None else f" ({wall_seconds / 60:.0f} minutes here)")
+        + ".",
+        "",
+        "Success: overtake, the ego passed (held the place 2 s) and is ahead at the end; defend, the ego is still "
+        "ahead at the end. Intervals: Wilson for rates, bootstrap for means.",
+        "",
+        "| " + " | ".join(head) + " |",
+        "|" + "---|" * len(head),
+    ]
+    lines += ["| " + " | ".join(cell_row(cell)) + " |" for cell in summary["cells"]]
+    lines += ["", "## Pass threshold r50", "", "| ego | opponent | r50 |", "|---|---|---|"]
+    for ego, row in summary["pass_threshold_r50"].items():
+        for opponent, r50 in row.items():
+            lines.append(f"| {ego} | {opponent} | {'below every pace' if r50 is None else f'{r50:g}'} |")
+    return "\n".join(lines) + "\n"
+
+
+def publish(summary: dict[str, Any], folder: Path, agents: Sequence[str], wall_seconds: float) -> None:
+    """Write ``summary`` into ``folder``: the summary JSON, its Markdown report and a manifest of the code, the
+    agents (every parameter, the trained weights), the condition sets, the machine and the wall time."""
+    folder.mkdir(parents=True, exist_ok=True)
+    described = [describe_agent(a) for a in sorted({without_pace(a) for a in agents})]
+    sets = sorted({s["conditions"] for s in summary["scenarios"].values()})
+    conditions = {"condition_sets": {name: condition_set(name).to_json() for name in sets}}
+    manifest = build_manifest("scenarios", described, "paper", conditions).to_json()
+    manifest["wall_seconds"] = round(wall_seconds, 1)
+    (folder / SUMMARY_FILE).write_text(json.dumps(summary, indent=1) + "\n")
+    (folder / REPORT_FILE).write_text(markdown_report(summary, wall_seconds))
+    (folder / MANIFEST_FILE).write_text(json.dumps(manifest, indent=1) + "\n")

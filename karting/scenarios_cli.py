@@ -1,0 +1,137 @@
+"""``karting scenarios``: the tactics suite (:mod:`arena.scenarios`): list the scenarios, run cells of them, and
+report a stored run as tables."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from karting.output import add_row, console, error, print_json, table
+
+app = typer.Typer(help="Tactical scenarios: overtaking and defending from placed karts.", no_args_is_help=True)
+
+CSV = Annotated[str, typer.Option(help="comma separated")]
+
+
+def _split(text: str) -> list[str]:
+    return [part.strip() for part in text.split(",") if part.strip()]
+
+
+@app.command("list")
+def list_scenarios() -> None:
+    """The shipped scenarios (``scenarios/*.json``) and what each measures."""
+    from arena.scenarios import load_scenario, shipped_scenarios
+
+    shown = table("scenarios", ["name", "kind", "place", "tracks", "paces", "description"], keys=["name"])
+    for name in shipped_scenarios():
+        s = load_scenario(name)
+        paces = ", ".join(f"{p:g}" for p in s.paces)
+        add_row(shown, s.name, s.kind, s.place, ", ".join(s.tracks), paces, s.description)
+    console.print(shown)
+
+
+@app.command()
+def run(
+    scenarios: CSV = "overtake-straight",
+    egos: CSV = "mcts-lqng,mcts-rl",
+    opponents: CSV = "fixed-lqng,fixed-rl,e2e",
+    tracks: Annotated[str | None, typer.Option(help="comma separated (default: each scenario's)")] = None,
+    paces: Annotated[str | None, typer.Option(help="comma separated (default: each scenario's ladder)")] = None,
+    attempts: Annotated[int, typer.Option(min=1, max=1000, help="seeded attempts per cell")] = 30,
+    seed: int = 0,
+    workers: Annotated[int, typer.Option(min=1, help="worker processes the cells are dealt to")] = 1,
+    out: Annotated[Path | None, typer.Option(help="also write the JSON summary here")] = None,
+    publish: Annotated[
+        Path | None, typer.Option(help="publish the summary, its report and a manifest into this folder")
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="print the JSON summary as the last line")] = False,
+) -> None:
+    """Race ATTEMPTS attempts of every cell (scenario, track, ego, opponent, pace): scenarios by shipped name or
+    file path; an ego never meets itself. Prints each cell's success rate with its 95% interval, the time to pass,
+    the ego's collisions at fault and illegal lane changes per attempt, and each ego's pass threshold r50."""
+    from arena.scenarios import SuiteResult, cells_of, load_scenario, run_cells
+
+    try:
+        loaded = [load_scenario(name) for name in _split(scenarios)]
+        pace_list = [float(p) for p in _split(paces)] if paces else None
+        track_list = _split(tracks) if tracks else None
+        plans = [(s, cells_of(s, _split(egos), _split(opponents), track_list, pace_list)) for s in loaded]
+    except (KeyError, ValueError) as exc:
+        error(str(exc).strip("'\""))
+        raise typer.Exit(2) from None
+    total = sum(len(cells) for _, cells in plans) * attempts
+    console.print(f"{total} attempts in {sum(len(c) for _, c in plans)} cells", style="dim")
+    started = time.perf_counter()
+    runs = tuple((s, tuple(run_cells(s, cells, attempts, seed, workers=workers))) for s, cells in plans)
+    wall = time.perf_counter() - started
+    summary = SuiteResult(runs, attempts, seed).to_json()
+    summary["command"] = " ".join(
+        f"--{name} {value}"
+        for name, value in (
+            ("scenarios", scenarios), ("egos", egos), ("opponents", opponents), ("tracks", tracks),
+            ("paces", paces), ("attempts", attempts), ("seed", seed), ("publish", publish),
+        )
+        if value is not None
+    )  # fmt: skip
+    _show(summary)
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(summary, indent=1) + "\n")
+    if publish is not None:
+        from arena.scenario_report import publish as publish_summary
+
+        publish_summary(summary, publish, [*_split(egos), *_split(opponents)], wall)
+        console.print(f"published into {publish}/")
+    if as_json:
+        print_json(summary)
+
+
+@app.command()
+def report(
+    summary: Annotated[Path, typer.Argument(help="a JSON summary written by `karting scenarios run --out`")],
+    markdown: Annotated[Path | None, typer.Option(help="write the tables as Markdown here")] = None,
+) -> None:
+    """Show a stored run's tables (and write them as Markdown)."""
+    try:
+        data = json.loads(summary.read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        error(f"cannot read {summary}: {exc}")
+        raise typer.Exit(2) from None
+    _show(data)
+    if markdown is not None:
+        from arena.scenario_report import markdown_report
+
+        markdown.write_text(markdown_report(data))
+        console.print(f"wrote {markdown}")
+
+
+def _show(summary: dict[str, Any]) -> None:
+    from arena.scenario_report import cell_row
+
+    columns = [
+        "scenario",
+        "track",
+        "ego",
+        "opponent",
+        "pace",
+        "n",
+        "success [95% CI]",
+        "to pass [s]",
+        "faults",
+        "illegal",
+    ]
+    shown = table("cells", columns, keys=["ego", "opponent"], numeric=["pace", "n", "to pass [s]"])
+    for cell in summary["cells"]:
+        add_row(shown, *cell_row(cell))
+    console.print(shown)
+    thresholds = table(
+        "pass threshold r50 (highest leader pace passed in half the attempts)", ["ego", "opponent", "r50"]
+    )
+    for ego, row in summary["pass_threshold_r50"].items():
+        for opponent, r50 in row.items():
+            add_row(thresholds, ego, opponent, "below every pace" if r50 is None else f"{r50:g}")
+    console.print(thresholds)
