@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 import multiprocessing
 from collections.abc import Callable, Iterable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -296,6 +296,10 @@ class CellFigures:
 Progress = Callable[[int, int], None]  # (attempts done, attempts in all)
 
 
+class RunStoppedError(Exception):
+    """A run was asked to stop (:func:`run_cells` ``should_stop``) before every cell was done."""
+
+
 def run_cells(
     scenario: Scenario,
     cells: Sequence[Cell],
@@ -304,21 +308,19 @@ def run_cells(
     batch: int = 16,
     progress: Progress | None = None,
     workers: int = 1,
+    should_stop: Callable[[], bool] | None = None,
 ) -> list[CellFigures]:
     """Race ``attempts`` attempts of every cell, ``batch`` races at a time in one batched world; with ``workers``
-    above 1 the cells are dealt to that many worker processes (``progress`` is then not told)."""
+    above 1 the cells go to that many worker processes, one cell at a time. ``should_stop`` is asked between
+    batches (between cells with workers): true raises :class:`RunStoppedError`."""
     if workers > 1 and len(cells) > 1:
-        groups = [list(cells[i::workers]) for i in range(min(workers, len(cells)))]
-        context = multiprocessing.get_context(start_method())
-        n = len(groups)
-        with ProcessPoolExecutor(n, mp_context=context) as pool:  # type: ignore[arg-type]
-            parts = pool.map(run_cells, [scenario] * n, groups, [attempts] * n, [seed] * n, [batch] * n)
-            by_cell = {f.cell: f for part in parts for f in part}
-        return [by_cell[c] for c in cells]
+        return _run_in_workers(scenario, cells, attempts, seed, batch, progress, workers, should_stop)
     specs = [(c, spec) for c in cells for spec in attempt_specs(scenario, c, attempts, seed)]
     results: dict[Cell, list[Attempt]] = {c: [] for c in cells}
     done = 0
     for group in _batches(specs, batch):
+        if should_stop is not None and should_stop():
+            raise RunStoppedError(f"stopped after {done} of {len(specs)} attempts")
         first_pass: dict[int, int] = {}
 
         def note_pass(world: World, race: int, _drivers: object, step: int, _seen: dict[int, int] = first_pass) -> None:
@@ -332,6 +334,35 @@ def run_cells(
         if progress is not None:
             progress(done, len(specs))
     return [CellFigures.of(c, results[c]) for c in cells]
+
+
+def _run_in_workers(
+    scenario: Scenario,
+    cells: Sequence[Cell],
+    attempts: int,
+    seed: int,
+    batch: int,
+    progress: Progress | None,
+    workers: int,
+    should_stop: Callable[[], bool] | None,
+) -> list[CellFigures]:
+    context = multiprocessing.get_context(start_method())
+    by_cell: dict[Cell, CellFigures] = {}
+    with ProcessPoolExecutor(min(workers, len(cells)), mp_context=context) as pool:  # type: ignore[arg-type]
+        futures = [pool.submit(run_cells, scenario, [cell], attempts, seed, batch) for cell in cells]
+        pending = set(futures)
+        while pending:
+            done, pending = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
+            for future in done:
+                (figures,) = future.result()
+                by_cell[figures.cell] = figures
+            if progress is not None and done:
+                progress(len(by_cell) * attempts, len(cells) * attempts)
+            if pending and should_stop is not None and should_stop():
+                for future in pending:
+                    future.cancel()  # the cells under way finish; the rest never start
+                raise RunStoppedError(f"stopped after {len(by_cell)} of {len(cells)} cells")
+    return [by_cell[c] for c in cells]
 
 
 def _batches(specs: Sequence[tuple[Cell, RaceSpec]], size: int) -> Iterable[list[tuple[Cell, RaceSpec]]]:

@@ -31,6 +31,7 @@ from server.race_config import HUMAN
 from server.replays import RecordedRace, RecordedRaces, ReplayScenes, ReplayView, StoredReplays
 from server.routes import api_router
 from server.routes.catalogue import load_track, track_names
+from server.scenario_runs import ScenarioRunner, ScenarioRunStore
 from server.services import RaceServices, SceneFactory
 from server.settings import Settings, is_loopback
 from server.tournament_db import TournamentDatabase
@@ -197,6 +198,9 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
             lambda: TournamentRunner(TournamentDatabase(db), settings.tournament_workers, settings.max_tournaments)
         )
         app.state.tournaments = tournaments
+        app.state.scenario_runs = await asyncio.to_thread(
+            lambda: ScenarioRunner(ScenarioRunStore(db), settings.tournament_workers)
+        )
         # trackers run in this process only without hosts; only the public registry's are known safe to try here
         in_process = [s for name, s in catalogue.items() if hosts is None and REGISTRY.get(name) is s]
         try:
@@ -210,6 +214,7 @@ def create_app(settings: Settings | None = None, *, controllers: Mapping[str, Co
             await races.shutdown()
             await replay_scenes.shutdown()
             await asyncio.to_thread(tournaments.shutdown)
+            await asyncio.to_thread(app.state.scenario_runs.shutdown)
             await asyncio.to_thread(pool.shutdown)
             if hosts is not None:
                 await asyncio.to_thread(hosts.close)

@@ -12,6 +12,7 @@ from fastapi.security import APIKeyHeader
 from server.live import LiveRaces
 from server.models import ErrorOut
 from server.replays import RecordedRaces
+from server.scenario_runs import ScenarioRunner
 from server.settings import Settings
 from server.tournament_plots import TournamentPlots
 from server.tournaments import TournamentRunner
@@ -42,6 +43,15 @@ def get_tournaments(connection: HTTPConnection) -> TournamentRunner:
 
 
 Tournaments = Annotated[TournamentRunner, Depends(get_tournaments)]
+
+
+def get_scenario_runs(connection: HTTPConnection) -> ScenarioRunner:
+    """The app's :class:`ScenarioRunner` (set up in the lifespan)."""
+    runner: ScenarioRunner = connection.app.state.scenario_runs
+    return runner
+
+
+ScenarioRuns = Annotated[ScenarioRunner, Depends(get_scenario_runs)]
 
 
 def get_tournament_plots(connection: HTTPConnection) -> TournamentPlots:

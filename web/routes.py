@@ -150,6 +150,18 @@ def _without_scene(race_id: str, state: RaceState | None) -> HTMLResponse:
     return _page("viewer-wait.html", race_id=race_id, status=state.status)
 
 
+# pages served as they are: their scripts read the API (the start page, the tournaments and the scenarios)
+PLAIN_PAGES = {"/": "index.html", "/tournaments": "tournaments.html", "/scenarios": "scenarios.html"}
+
+
+def _plain_page(name: str) -> Callable[[], Response]:
+    def page() -> Response:
+        return HTMLResponse(_static(name), headers=NO_CACHE)
+
+    page.__doc__ = f"The page {name}."
+    return page
+
+
 def make_web_router(
     scene_port: Callable[[str], int | None],
     race_state: Callable[[str], RaceState | None],
@@ -179,15 +191,13 @@ def make_web_router(
     * ``GET /races/{race_id}/drive?kart=K&token=T``: the drive page (viewer + keyboard input; 404 page for an
       unknown race);
     * ``GET /tournaments``: the tournaments page (stored tournaments, leaderboard, launch form);
+    * ``GET /scenarios``: the scenarios page (runs, a run's cells and pass thresholds, launch form);
     * ``GET /tournaments/{tournament_id}``: a tournament's page (progress, races, tables and plots; 404 for an
       unknown tournament, with the same page, whose script says there is no such tournament).
     """
     router = APIRouter(include_in_schema=False)
-
-    @router.get("/", response_class=HTMLResponse)
-    def start_page() -> Response:
-        """The start page."""
-        return HTMLResponse(_static("index.html"), headers=NO_CACHE)
+    for path, page in PLAIN_PAGES.items():
+        router.add_api_route(path, _plain_page(page), methods=["GET"], response_class=HTMLResponse)
 
     @router.get("/assets/{name}")
     def asset(name: str) -> Response:
@@ -237,11 +247,6 @@ def make_web_router(
         if race_state(race_id) is None:
             return _no_such_race(race_id)
         return HTMLResponse(_static("drive.html"), headers=NO_CACHE)
-
-    @router.get("/tournaments", response_class=HTMLResponse)
-    def tournaments_page() -> Response:
-        """The tournaments page (its script reads ``/api/tournaments``)."""
-        return HTMLResponse(_static("tournaments.html"), headers=NO_CACHE)
 
     @router.get("/tournaments/{tournament_id}", response_class=HTMLResponse)
     async def tournament_page(tournament_id: str) -> Response:
