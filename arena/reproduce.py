@@ -26,7 +26,7 @@ from arena.publish import (
 )
 from arena.stats import COMBINED, TournamentStats, tournament_stats
 from arena.tournament import TournamentSpec
-from sim_core.conditions import condition_set
+from sim_core.conditions import ConditionSet, condition_set
 
 PAPER_AGENTS = ("mcts-rl", "e2e", "fixed-rl", "mcts-lqng", "fixed-lqng")
 CONDITIONS = ("paper", "varied")
@@ -193,7 +193,8 @@ def reproduction_problems(out: Path, readme: Path | None) -> list[str]:
 
 def stale_conditions(folder: Path, conditions: str) -> list[str]:
     """How the condition set a published tournament raced under differs from the set of that name now (empty:
-    it does not, or nothing is published there): results raced under another ``varied`` are not ``varied``'s."""
+    it does not, or nothing is published there): results raced under another ``varied`` are not ``varied``'s. A
+    parameter missing from the record counts as its default (sets gain parameters whose default changes nothing)."""
     manifest = folder / MANIFEST_FILE
     if not manifest.is_file():
         return []
@@ -201,7 +202,13 @@ def stale_conditions(folder: Path, conditions: str) -> list[str]:
     now = condition_set(conditions).to_json()
     if not isinstance(recorded, dict):
         return [f"its manifest records no {conditions!r} condition set: run karting reproduce paper"]
-    changed = sorted(key for key in set(recorded) | set(now) if recorded.get(key) != now.get(key))
+    # a parameter the sets gained since, at its default, draws what the set drew before it existed
+    defaults = ConditionSet("defaults").to_json()
+    changed = sorted(
+        key
+        for key in set(recorded) | set(now)
+        if (recorded[key] if key in recorded else defaults.get(key)) != now.get(key)
+    )
     return (
         [f"the {conditions!r} conditions changed since it raced ({', '.join(changed)}): run it again"]
         if changed

@@ -65,9 +65,9 @@ class RaceSpec:
         series with the same seeds and different drivers meet the same conditions (a paired comparison)."""
         return self.condition_set().draw(self.seed, len(self.controllers), self.start_lanes)
 
-    def kart_paces(self) -> tuple[float, ...]:
-        """Each kart's pace handicap, from its agent string (``NAME@PACE``; 1 without)."""
-        return tuple(agent_pace(a) for a in self.controllers)
+    def kart_paces(self, conditions: RaceConditions) -> tuple[float, ...]:
+        """Each kart's pace: its agent's handicap (``NAME@PACE``; 1 without) times the pace ``conditions`` drew."""
+        return tuple(agent_pace(a) * p for a, p in zip(self.controllers, conditions.paces, strict=True))
 
 
 @dataclass(frozen=True)
@@ -260,7 +260,7 @@ class _Race:
             start_lanes=spec.start_lanes,
             wear=conditions.start_wear,
             start_offsets=conditions.start_offsets,
-            paces=spec.kart_paces(),
+            paces=spec.kart_paces(conditions),
         )
         if spec.placements is not None:
             _place(world, index, spec.placements, conditions.start_wear)

@@ -28,6 +28,7 @@ from server.limits import (
 from server.race_config import ParamValue
 from server.results import DriverFaults, record_name
 from server.status import RaceStatus
+from sim_core.conditions import ConditionName
 from sim_core.params import MIN_PACE
 from sim_core.world import KartResult
 from web.frame import KartFrame
@@ -125,10 +126,11 @@ class RaceIn(BaseModel):
         description="one start lane (1-based) per kart, as many as karts; default 2, 3, 1, 4",
     )
     kart_preset: Literal["paper", "original"] = "paper"
-    conditions: Literal["paper", "varied"] = Field(
+    conditions: ConditionName = Field(
         "paper",
-        description="race conditions drawn from the seed: paper (every kart launches at once, no imprecision) or "
-        "varied (launch reactions within 0.25 s, start wear, the AI drivers' small imprecision)",
+        description="race conditions drawn from the seed: paper (every kart launches at once, no imprecision), "
+        "varied (launch reactions within 0.25 s, start wear, the AI drivers' small imprecision) or varied-pace "
+        "(varied, and each AI kart's pace within 2% of the kart's)",
     )
     karts: list[KartIn] = Field(min_length=MIN_KARTS, max_length=MAX_KARTS)
 

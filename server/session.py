@@ -247,7 +247,8 @@ class RaceSession:
         config = self.config
         world = World(config.track, 1, len(self.drivers), params, laps=config.laps)
         drawn = self._conditions
-        paces = [d.entry.pace for d in self.drivers]  # each kart's pace handicap, a human's too
+        # each kart's pace handicap, a human's too; an AI kart's times the pace the conditions drew
+        paces = [d.entry.pace * (1.0 if d.human else drawn.paces[d.index]) for d in self.drivers]
         world.reset(
             start_lanes=config.start_lanes, wear=drawn.start_wear, start_offsets=drawn.start_offsets, paces=paces
         )

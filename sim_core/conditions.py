@@ -11,6 +11,8 @@ turns a seed into one race's :class:`RaceConditions`:
   karting grids stand; which kart starts in which lane is the race's (a tournament alternates them);
 * **tyre wear at the start**, per kart, uniform in ``wear_range`` (the lateral grip falls with wear,
   :func:`sim_core.kart.lateral_limit`);
+* **pace**, per kart, uniform in ``pace_range``: the kart drives as the reference kart at that pace
+  (:meth:`sim_core.params.KartParams.paced`), times any handicap its agent string asks for (``NAME@PACE``);
 * **driver imprecision**: seeded noise added to each kart's steer and throttle commands, an Ornstein-Uhlenbeck
   process (standard deviations ``steer_noise`` and ``throttle_noise`` of full scale, correlation time
   ``noise_time``): a hand's slow drift, not a per-step jitter the kart's inertia would average away.
@@ -22,20 +24,20 @@ seeds meet the same conditions (a paired design). Named sets: :data:`CONDITION_S
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
 from numba import njit
 
-from sim_core.params import DT, RuleParams
+from sim_core.params import DT, MIN_PACE, RuleParams
 
 GridLayout = Literal["side_by_side", "staggered"]
 GRID_LAYOUTS: tuple[GridLayout, ...] = ("side_by_side", "staggered")
 MAX_START_SPREAD = 2.0  # [s]
 MAX_NOISE = 0.5  # of full scale: beyond it the commands are more noise than driver
 # keep the random streams of each condition apart from each other and from any other use of the seed
-LAUNCH_STREAM, WEAR_STREAM, NOISE_STREAM = 0x57A27, 0x3EA2, 0x4015E
+LAUNCH_STREAM, WEAR_STREAM, NOISE_STREAM, PACE_STREAM = 0x57A27, 0x3EA2, 0x4015E, 0x9ACE
 PAPER_WEAR = RuleParams().start_wear
 
 
@@ -51,6 +53,11 @@ class RaceConditions:
     throttle_noise: float  # standard deviation, of full throttle
     noise_time: float  # [s] correlation time of the noise
     noise_seed: int  # seeds the noise's stream (:class:`Imprecision`)
+    paces: tuple[float, ...] = ()  # [-] per kart (empty: every kart at the reference pace, 1)
+
+    def __post_init__(self) -> None:
+        if not self.paces:
+            object.__setattr__(self, "paces", (1.0,) * len(self.launch_delays))
 
     def launched(self, step: int) -> np.ndarray:
         """(K,) whether each kart's launch delay has passed at simulation step ``step`` (it drives from then on)."""
@@ -70,13 +77,16 @@ class RaceConditions:
 
     def to_json(self) -> dict[str, Any]:
         """Every value, for a result's record."""
-        return {**asdict(self), **{k: list(getattr(self, k)) for k in ("launch_delays", "start_offsets", "start_wear")}}
+        return {**asdict(self), **{k: list(getattr(self, k)) for k in PER_KART}}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RaceConditions:
-        """Read back :meth:`to_json`."""
-        tuples = {k: tuple(float(v) for v in data[k]) for k in ("launch_delays", "start_offsets", "start_wear")}
+        """Read back :meth:`to_json` (a record from before paces were drawn: every kart at pace 1)."""
+        tuples = {k: tuple(float(v) for v in data.get(k, ())) for k in PER_KART}
         return cls(**{**data, **tuples})
+
+
+PER_KART = ("launch_delays", "start_offsets", "start_wear", "paces")
 
 
 @dataclass(frozen=True)
@@ -91,6 +101,7 @@ class ConditionSet:
     steer_noise: float = 0.0  # standard deviation, of full lock
     throttle_noise: float = 0.0  # standard deviation, of full throttle
     noise_time: float = 0.3  # [s] correlation time
+    pace_range: tuple[float, float] = (1.0, 1.0)  # [-] each kart's pace uniform in this range
     description: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -113,6 +124,9 @@ class ConditionSet:
         for name in ("steer_noise", "throttle_noise"):
             if not 0.0 <= getattr(self, name) <= MAX_NOISE:
                 found.append(f"{name} must be in [0, {MAX_NOISE}], got {getattr(self, name)}")
+        pace_low, pace_high = self.pace_range
+        if not MIN_PACE <= pace_low <= pace_high <= 1.0:
+            found.append(f"pace_range must be {MIN_PACE:g} <= low <= high <= 1, got {list(self.pace_range)}")
         if not self.noise_time > 0.0:
             found.append(f"noise_time must be > 0 s, got {self.noise_time}")
         return found
@@ -137,7 +151,14 @@ class ConditionSet:
             self.throttle_noise,
             self.noise_time,
             int(np.random.SeedSequence([abs(seed), NOISE_STREAM]).generate_state(1)[0]),
+            self._paces(seed, n_karts),
         )
+
+    def _paces(self, seed: int, n_karts: int) -> tuple[float, ...]:
+        low, high = self.pace_range
+        if high == low:
+            return (low,) * n_karts
+        return tuple(float(p) for p in np.random.default_rng([abs(seed), PACE_STREAM]).uniform(low, high, n_karts))
 
     def start_offsets(self, n_karts: int, start_lanes: tuple[int, ...] | None = None) -> tuple[float, ...]:
         """[m] how far behind its row's line each kart stands: 0 side by side; on a staggered grid ``stagger``
@@ -153,7 +174,7 @@ class ConditionSet:
 
     def to_json(self) -> dict[str, Any]:
         """Every parameter (a manifest's record of the set)."""
-        return {**asdict(self), "wear_range": list(self.wear_range)}
+        return {**asdict(self), "wear_range": list(self.wear_range), "pace_range": list(self.pace_range)}
 
 
 class Imprecision:
@@ -215,7 +236,15 @@ VARIED = ConditionSet(
     description="launch reactions within 0.25 s, start wear within +-0.05 of the paper's, and small seeded "
     "noise on every command (docs/conditions.md: the magnitude and its measurement)",
 )
-CONDITION_SETS: dict[str, ConditionSet] = {s.name: s for s in (PAPER, VARIED)}
+VARIED_PACE = replace(
+    VARIED,
+    name="varied-pace",
+    pace_range=(0.98, 1.0),
+    description="varied, and each kart's pace drawn per race within 2% of the kart's: agents of near pace, neither "
+    "one always the faster",
+)
+CONDITION_SETS: dict[str, ConditionSet] = {s.name: s for s in (PAPER, VARIED, VARIED_PACE)}
+ConditionName = Literal["paper", "varied", "varied-pace"]  # the named sets, for typed request fields
 
 
 def condition_set(name: str) -> ConditionSet:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import asyncio
 from datetime import datetime
-from typing import Any, Literal
+from typing import Any
 
 from fastapi import APIRouter, HTTPException, Response, status
 from fastapi.exceptions import RequestValidationError
@@ -35,6 +35,7 @@ from server.models import ErrorOut, ManifestOut, Name
 from server.strict_json import StrictJSONRoute
 from server.tournament_db import TOURNAMENT_ID, StoredTournament, TournamentRace
 from server.tournaments import TooManyTournamentsError, TournamentConflictError, TournamentRunner
+from sim_core.conditions import ConditionName
 
 router = APIRouter(route_class=StrictJSONRoute)
 MAX_RACES_PER_PAIR = 500
@@ -58,10 +59,11 @@ class TournamentIn(BaseModel):
     laps: int | None = Field(default=None, ge=1, le=20, description="default: each track's")
     time_limit: float | None = Field(default=None, gt=0.0, le=3600.0, description="[s] default: the rules'")
     kart_preset: str = Field(default="paper", pattern="^(paper|original)$")
-    conditions: Literal["paper", "varied"] = Field(
+    conditions: ConditionName = Field(
         default="varied",
         description="race conditions drawn from each race's seed: varied (launch reactions, start wear, the "
-        "drivers' imprecision) or paper (the original's experiment)",
+        "drivers' imprecision), varied-pace (varied, each kart's pace within 2% of the kart's) or paper (the "
+        "original's experiment)",
     )
     id: str | None = Field(default=None, pattern=TOURNAMENT_ID.pattern, description="default: a new id")
 

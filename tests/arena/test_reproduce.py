@@ -10,6 +10,7 @@ from pathlib import Path
 from arena.records import KartFigures, RaceFigures
 from arena.reproduce import lane_decided_pairs, stale_conditions
 from arena.stats import tournament_stats
+from sim_core.conditions import condition_set
 
 RESULTS = Path(__file__).resolve().parents[2] / "docs" / "results"
 
@@ -24,6 +25,15 @@ def test_published_results_go_stale_when_their_condition_set_changes(tmp_path: P
     assert stale_conditions(folder, "varied") == [
         "the 'varied' conditions changed since it raced (steer_noise): run it again"
     ]
+    # a parameter the set gained since counts at its default (pace_range: every kart at pace 1, as before it)
+    recorded = manifest["conditions"]["conditions"]
+    recorded["steer_noise"] = condition_set("varied").steer_noise
+    recorded.pop("pace_range", None)
+    (folder / "manifest.json").write_text(json.dumps(manifest))
+    assert stale_conditions(folder, "varied") == []
+    recorded["pace_range"] = [0.9, 1.0]
+    (folder / "manifest.json").write_text(json.dumps(manifest))
+    assert "changed since it raced (pace_range)" in stale_conditions(folder, "varied")[0]
     del manifest["conditions"]["conditions"]
     (folder / "manifest.json").write_text(json.dumps(manifest))
     assert "records no 'varied' condition set" in stale_conditions(folder, "varied")[0]

@@ -14,6 +14,7 @@ from sim_core.conditions import VARIED
 from sim_core.observation import observe
 from sim_core.params import DT
 from sim_core.state import F_WEAR
+from sim_core.world import World
 
 
 def test_paper_races_launch_every_kart_at_once_without_noise() -> None:
@@ -90,3 +91,17 @@ def test_imprecision_perturbs_the_applied_commands_by_its_stated_magnitude() -> 
     assert steer.std() == pytest.approx(VARIED.steer_noise, rel=0.5)  # 5 s of a 0.3 s correlation time: rough
     assert throttle.std() == pytest.approx(VARIED.throttle_noise, rel=0.5)
     assert abs(np.corrcoef(steer[:, 0], steer[:, 1])[0, 1]) < 0.5  # each kart its own hands
+
+
+def test_each_kart_drives_at_its_agent_pace_times_the_pace_its_conditions_drew() -> None:
+    spec = RaceSpec(track="oval", controllers=("lane-follower", "lane-follower@0.9"), laps=1, conditions="varied-pace")
+    drawn = spec.drawn().paces
+    seen: list[tuple[float, ...]] = []
+
+    def note(world: World, drivers: object, step: int) -> None:
+        if step == 0:
+            seen.append(tuple(world.paces[0]))
+            assert world.kart_params(0, 1).top_speed == pytest.approx(15.0 * 0.9 * drawn[1])
+
+    run_race(spec, on_step=note)
+    assert seen == [(drawn[0], 0.9 * drawn[1])] and drawn[0] != drawn[1] and min(drawn) >= 0.98

@@ -4,6 +4,7 @@ sets, the imprecision noise's statistics and the grid they put karts on."""
 from __future__ import annotations
 
 import math
+from typing import get_args
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from sim_core.conditions import (
     MAX_START_SPREAD,
     PAPER,
     VARIED,
+    ConditionName,
     ConditionSet,
     Imprecision,
     RaceConditions,
@@ -59,9 +61,25 @@ def test_a_value_out_of_range_is_refused_naming_it(field: str, value: object) ->
 
 
 def test_unknown_sets_are_refused_naming_the_known_ones() -> None:
-    assert condition_set("varied") is VARIED and set(CONDITION_SETS) == {"paper", "varied"}
+    assert condition_set("varied") is VARIED and set(CONDITION_SETS) == set(get_args(ConditionName))
     with pytest.raises(KeyError, match="paper"):
         condition_set("wet")
+
+
+def test_paces_are_drawn_per_kart_within_the_range_apart_from_the_other_draws() -> None:
+    """varied-pace draws each kart's pace within [0.98, 1]: different karts, different races; and everything else
+    as varied draws it (the pace has a stream of its own), so the two sets are paired race for race."""
+    paced = [condition_set("varied-pace").draw(seed, 4) for seed in range(20)]
+    plain = [VARIED.draw(seed, 4) for seed in range(20)]
+    every = [p for race in paced for p in race.paces]
+    assert all(0.98 <= p <= 1.0 for p in every) and len(set(every)) == len(every)
+    assert all(race.paces == (1.0,) * 4 for race in plain)
+    strip = {"name": None, "paces": None}
+    assert [r.to_json() | strip for r in paced] == [r.to_json() | strip for r in plain]
+    assert RaceConditions.from_json(paced[0].to_json()) == paced[0]
+    old = paced[0].to_json()
+    del old["paces"]  # a record from before paces were drawn
+    assert RaceConditions.from_json(old).paces == (1.0,) * 4
 
 
 def test_a_staggered_grid_puts_the_pole_in_lane_two_and_the_others_behind_it() -> None:
