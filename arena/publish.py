@@ -25,7 +25,7 @@ from typing import Any
 
 from arena.manifest import Manifest, SpecLookup, source_commit, stale_agents
 from arena.records import RaceFigures
-from arena.report import safety_rows, win_rows, write_report
+from arena.report import markdown_table, safety_rows, win_rows, write_report
 from arena.stats import COMBINED, TournamentStats, TrackStats, tournament_stats
 from controllers.registry import controller_spec
 
@@ -99,11 +99,6 @@ def totals_rows(table: TrackStats) -> list[list[str]]:
     return out
 
 
-def _markdown(rows: Sequence[Sequence[str]]) -> str:
-    lines = ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
-    return "\n".join([*lines, *("| " + " | ".join(row) + " |" for row in rows[1:])])
-
-
 def _short(commit: str) -> str:
     return commit[:10] if commit != "unknown" else commit
 
@@ -129,7 +124,7 @@ def readme_table(stats: TournamentStats, tournament: Tournament, folder: str) ->
         f"p = 0.05). Written by `karting tournament publish`; the agents' parameters, the conditions and the "
         f"per-track tables are in [`{folder}/`]({folder}/README.md)."
     )
-    return f"{text}\n\n{_markdown(totals_rows(stats.tracks[COMBINED]))}"
+    return f"{text}\n\n{markdown_table(totals_rows(stats.tracks[COMBINED]))}"
 
 
 def run_command(tournament_id: str, spec: Mapping[str, Any]) -> str:
@@ -214,9 +209,9 @@ def results_readme(stats: TournamentStats, tournament: Tournament, race_commits:
         if track == COMBINED and len(stats.tracks) == 2:
             continue  # one track: the same table again
         name = "all tracks" if track == COMBINED else f"`{track}`"
-        lines += ["", f"## Wins on {name} (row agent against column agent)", "", _markdown(totals_rows(table))]
+        lines += ["", f"## Wins on {name} (row agent against column agent)", "", markdown_table(totals_rows(table))]
     combined = stats.tracks[COMBINED]
-    lines += ["", "## Safety per race over all tracks: mean and std. dev.", "", _markdown(safety_rows(combined))]
+    lines += ["", "## Safety per race over all tracks: mean and std. dev.", "", markdown_table(safety_rows(combined))]
     lines += ["", "`report.md` has every table per track (plan following, start lanes), `*.csv` the same, `*.png`"]
     lines += ["the plots, `stats.json` the statistics and their tests; `*`: significant at p = 0.05.", ""]
     return "\n".join(lines)

@@ -141,7 +141,8 @@ def start_lane_rows(table: TrackStats) -> list[list[str]]:
     return rows
 
 
-def _markdown(rows: Sequence[Sequence[str]]) -> str:
+def markdown_table(rows: Sequence[Sequence[str]]) -> str:
+    """``rows`` (the first the header) as a Markdown table."""
     lines = ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
     lines += ["| " + " | ".join(row) + " |" for row in rows[1:]]
     return "\n".join(lines)
@@ -152,17 +153,27 @@ def markdown(stats: TournamentStats, title: str) -> str:
     parts = [f"# {title}", ""]
     if stats.ratings:
         parts += ["## Ratings from every race (Plackett-Luce; a beats b with probability 1 / (1 + e^(θb - θa)))", ""]
-        parts += [_markdown(rating_rows(stats)), ""]
+        parts += [markdown_table(rating_rows(stats)), ""]
     for track, table in stats.tracks.items():
         name = "All tracks" if track == COMBINED else f"Track `{track}`"
         parts += [f"## {name}", "", "### Head-to-head wins, row agent against column agent", ""]
-        parts += [_markdown(win_rows(table)), "", "### Pairs: win rates with 95% intervals, and the grid's part", ""]
-        parts += [_markdown(pair_rows(table)), "", "### Safety per race: mean [95% CI] and std. dev., all races", ""]
-        parts += [_markdown(safety_rows(table)), "", "### Plan following (finished races) and passes", ""]
-        parts += [_markdown(plan_rows(table)), ""]
+        parts += [
+            markdown_table(win_rows(table)),
+            "",
+            "### Pairs: win rates with 95% intervals, and the grid's part",
+            "",
+        ]
+        parts += [
+            markdown_table(pair_rows(table)),
+            "",
+            "### Safety per race: mean [95% CI] and std. dev., all races",
+            "",
+        ]
+        parts += [markdown_table(safety_rows(table)), "", "### Plan following (finished races) and passes", ""]
+        parts += [markdown_table(plan_rows(table)), ""]
         if table.start_lanes.races:
             parts += ["### Wins by start lane (row pair's first agent; Fisher's exact test of the lane's effect)", ""]
-            parts += [_markdown(start_lane_rows(table)), ""]
+            parts += [markdown_table(start_lane_rows(table)), ""]
     parts += [
         "`*`: significant at p = 0.05 (wins: two-sided binomial test of the pair's decided races; per-race figures: "
         "two-sided pooled t-tests, marked when significant against every other agent; start lanes: Fisher's exact "

@@ -19,11 +19,11 @@ from arena.publish import (
     MANIFEST_FILE,
     README_TABLE_FILE,
     Tournament,
-    _markdown,
     published_problems,
     readme_block,
     replace_block,
 )
+from arena.report import markdown_table
 from arena.stats import COMBINED, TournamentStats, tournament_stats
 from arena.tournament import TournamentSpec
 from sim_core.conditions import ConditionSet, condition_set
@@ -159,7 +159,7 @@ def readme_table(reproductions: Sequence[Reproduction]) -> str:
     return (
         f"The paper's headline figures beside ours (races per pair and track: {sizes}; 95% Wilson intervals in "
         "brackets; written by `karting reproduce paper`, details in [`docs/results/`](docs/results/README.md)).\n\n"
-        + _markdown(findings_rows(reproductions))
+        + markdown_table(findings_rows(reproductions))
     )
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from arena.manifest import build_manifest, describe_agent
+from arena.report import markdown_table
 from controllers.registry import without_pace
 from sim_core.conditions import condition_set
 
@@ -41,26 +42,26 @@ def markdown_report(summary: dict[str, Any], wall_seconds: float | None = None) 
     """A stored run (:meth:`SuiteResult.to_json`) as Markdown tables."""
     head = ["scenario", "track", "ego", "opponent", "pace", "attempts", "success [95% CI]", "time to pass [s]",
             "collisions at fault / attempt", "illegal lane changes / attempt"]  # fmt: skip
+    took = "" if wall_seconds is None else f" ({wall_seconds / 60:.0f} minutes here)"
+    thresholds = [
+        [ego, opponent, "below every pace" if r50 is None else f"{r50:g}"]
+        for ego, row in summary["pass_threshold_r50"].items()
+        for opponent, r50 in row.items()
+    ]
     lines = [
         f"# Scenarios: {summary['attempts']} attempts per cell, seed {summary['seed']}",
         "",
-        "Regenerate: `karting scenarios run "
-        + summary.get("command", "...")
-        + "`"
-        + ("" if wall_seconds is None else f" ({wall_seconds / 60:.0f} minutes here)")
-        + ".",
+        f"Regenerate: `karting scenarios run {summary.get('command', '...')}`{took}.",
         "",
         "Success: overtake, the ego passed (held the place 2 s) and is ahead at the end; defend, the ego is still "
         "ahead at the end. Intervals: Wilson for rates, bootstrap for means.",
         "",
-        "| " + " | ".join(head) + " |",
-        "|" + "---|" * len(head),
+        markdown_table([head, *(cell_row(cell) for cell in summary["cells"])]),
+        "",
+        "## Pass threshold r50",
+        "",
+        markdown_table([["ego", "opponent", "r50"], *thresholds]),
     ]
-    lines += ["| " + " | ".join(cell_row(cell)) + " |" for cell in summary["cells"]]
-    lines += ["", "## Pass threshold r50", "", "| ego | opponent | r50 |", "|---|---|---|"]
-    for ego, row in summary["pass_threshold_r50"].items():
-        for opponent, r50 in row.items():
-            lines.append(f"| {ego} | {opponent} | {'below every pace' if r50 is None else f'{r50:g}'} |")
     return "\n".join(lines) + "\n"
 
 

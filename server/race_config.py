@@ -3,12 +3,15 @@ parameters). Built once from a validated request (:mod:`server.routes.races`), s
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from controllers.base import RaceContext
 from sim_core.conditions import RaceConditions, condition_set
+from sim_core.params import SimParams
 from sim_core.track import Track
+from sim_core.world import World
 
 HUMAN = "human"  # the controller name of a kart driven over the drive websocket
 
@@ -65,3 +68,19 @@ class RaceConfig:
     def drawn(self) -> RaceConditions:
         """This race's conditions, drawn from its seed (:meth:`sim_core.conditions.ConditionSet.draw`)."""
         return condition_set(self.conditions).draw(self.seed, len(self.karts), self.start_lanes)
+
+
+def build_world(config: RaceConfig, params: SimParams, drawn: RaceConditions, humans: Sequence[bool]) -> World:
+    """The race's one-race world on its grid: the drawn start wear and offsets, and each kart at its pace handicap
+    (a human's too), an AI kart's times the pace the conditions drew."""
+    world = World(config.track, 1, len(config.karts), params, laps=config.laps)
+    paces = [k.pace * (1.0 if human else drawn.paces[k.index]) for k, human in zip(config.karts, humans, strict=True)]
+    world.reset(start_lanes=config.start_lanes, wear=drawn.start_wear, start_offsets=drawn.start_offsets, paces=paces)
+    return world
+
+
+def driver_context(config: RaceConfig, world: World, kart: int) -> RaceContext:
+    """What the driver of ``kart`` learns at the start: the track, its kart at its pace, and its seed."""
+    context = RaceContext(config.track, world.kart_params(0, kart), kart, len(config.karts), world.lane_change_limit,
+                          config.seed * 1000 + kart, float(world.paces[0, kart]))  # fmt: skip
+    return context

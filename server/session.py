@@ -26,7 +26,6 @@ from typing import Any
 
 import numpy as np
 
-from controllers.base import RaceContext
 from controllers.plan import Plan
 from controllers.replay import ReplayRecorder, apply_plan_targets
 from server.absent_drivers import DriverWait, StuckWatch, not_ready
@@ -38,7 +37,7 @@ from server.frames import TelemetryMessage, build_frame, replay_json
 from server.host_messages import PlannerSetup
 from server.kart_workers import KartWorkers
 from server.plan_requests import PlanRequests
-from server.race_config import RaceConfig
+from server.race_config import RaceConfig, build_world, driver_context
 from server.results import RaceRecord, RaceSetup, live_race_manifest, race_record
 from server.services import RaceServices, Scene
 from server.snapshot import DriverState, RaceSnapshot, Standing
@@ -214,21 +213,7 @@ class RaceSession:
         params = SimParams(kart=kart_preset(config.kart_preset))
         self.world = world = await asyncio.to_thread(self._build_world, params)
         self.replay.allocate(int(world.rule_vector[st.RP_TIME_LIMIT_STEPS]) + 1)  # up to the time limit
-        n = len(self.drivers)
-        limit = world.lane_change_limit
-        contexts = {
-            d.index: RaceContext(
-                config.track,
-                world.kart_params(0, d.index),  # at the kart's pace
-                d.index,
-                n,
-                limit,
-                config.seed * 1000 + d.index,
-                float(world.paces[0, d.index]),
-            )
-            for d in self.drivers
-            if not d.human
-        }
+        contexts = {d.index: driver_context(config, world, d.index) for d in self.drivers if not d.human}
         ai = [d for d in self.drivers if not d.human and not d.disabled]
         opening = []
         for d in ai:
@@ -244,15 +229,8 @@ class RaceSession:
         self._publish()
 
     def _build_world(self, params: SimParams) -> World:
-        config = self.config
-        world = World(config.track, 1, len(self.drivers), params, laps=config.laps)
-        drawn = self._conditions
-        # each kart's pace handicap, a human's too; an AI kart's times the pace the conditions drew
-        paces = [d.entry.pace * (1.0 if d.human else drawn.paces[d.index]) for d in self.drivers]
-        world.reset(
-            start_lanes=config.start_lanes, wear=drawn.start_wear, start_offsets=drawn.start_offsets, paces=paces
-        )
-        return world
+        humans = [d.human for d in self.drivers]
+        return build_world(self.config, params, self._conditions, humans)
 
     async def _open_scene(self) -> None:
         scene_factory = self.services.scene_factory

@@ -14,6 +14,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from sim_core import state as st
+
 SIM_HZ = 50  # [Hz] fixed simulation rate, the same live and headless
 DT = 1.0 / SIM_HZ  # [s] fixed simulation step
 GRAVITY = 9.81  # [m/s^2]
@@ -210,3 +212,29 @@ class SimParams:
     kart: KartParams = field(default_factory=lambda: PAPER_KART)
     rules: RuleParams = field(default_factory=RuleParams)
     sensors: SensorParams = field(default_factory=SensorParams)
+
+    def rule_vector(self, track_lane_limit: int, laps: int) -> np.ndarray:
+        """The rules and sensors packed for the compiled step (layout: ``sim_core.state.RP_*``), for a track whose
+        own lane-change limit is ``track_lane_limit`` (the rules' limit, when set, overrides it) raced over
+        ``laps`` laps."""
+        rules, sensors = self.rules, self.sensors
+        v = np.zeros(st.N_RULE)
+        v[st.RP_TIME_LIMIT_STEPS] = round(rules.time_limit / DT)
+        v[st.RP_LANE_LIMIT] = rules.lane_change_limit if rules.lane_change_limit is not None else track_lane_limit
+        v[st.RP_FAULT_COOLDOWN_STEPS] = round(rules.fault_cooldown / DT)
+        v[st.RP_CONTACT_MARGIN] = rules.contact_margin
+        v[st.RP_CONE_COS] = rules.fault_cone_cos
+        v[st.RP_BUFFER_SIDE] = rules.buffer_side
+        v[st.RP_BUFFER_BEHIND] = rules.buffer_behind
+        v[st.RP_BEHIND_OVERLAP] = rules.behind_lateral_overlap
+        v[st.RP_LANE_DEADZONE] = rules.lane_deadzone
+        v[st.RP_LAPS] = laps
+        v[st.RP_DT] = DT
+        v[st.RP_RAY_RANGE] = sensors.max_range
+        v[st.RP_RAY_ORIGIN] = sensors.origin_forward
+        v[st.RP_LANE_HYSTERESIS] = rules.lane_hysteresis
+        checkpoint = rules.lane_change_counting == "checkpoint"
+        v[st.RP_LANE_COUNTING] = st.LANE_COUNTING_CHECKPOINT if checkpoint else st.LANE_COUNTING_PER_STEP
+        v[st.RP_ALONGSIDE] = rules.alongside_gap
+        v[st.RP_LATERAL_FAULT_SPEED] = rules.lateral_fault_speed
+        return v

@@ -70,7 +70,7 @@ HIT_NONE = 0
 HIT_WALL = 1
 HIT_KART = 2
 
-# packed rule parameters (see sim_core.world._rule_vector)
+# packed rule parameters (see sim_core.params.SimParams.rule_vector)
 RP_TIME_LIMIT_STEPS = 0
 RP_LANE_LIMIT = 1
 RP_FAULT_COOLDOWN_STEPS = 2

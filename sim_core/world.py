@@ -104,7 +104,7 @@ class World:
         # every kart's own parameters (B, K, P): the reference kart, or it at a pace (:meth:`set_pace`)
         self.kart_rows = np.tile(self.kart_vector, (n_races, n_karts, 1))
         self.paces = np.ones((n_races, n_karts))
-        self.rule_vector = self._rule_vector()
+        self.rule_vector = self.params.rule_vector(track.lane_change_limit, self.laps)
         self.ray_angles = self.params.sensors.angles_rad_left_positive()
         n = track.n_checkpoints
         self.fstate = np.zeros((n_races, n_karts, st.N_FLOAT))
@@ -123,33 +123,6 @@ class World:
         self._scratch_floats = np.full(n_floats, np.nan)
         self._scratch_bools = np.zeros(n_bools, dtype=np.bool_)
         self.reset()
-
-    def _rule_vector(self) -> np.ndarray:
-        rules = self.params.rules
-        sensors = self.params.sensors
-        v = np.zeros(st.N_RULE)
-        v[st.RP_TIME_LIMIT_STEPS] = round(rules.time_limit / DT)
-        v[st.RP_LANE_LIMIT] = (
-            rules.lane_change_limit if rules.lane_change_limit is not None else self.track.lane_change_limit
-        )
-        v[st.RP_FAULT_COOLDOWN_STEPS] = round(rules.fault_cooldown / DT)
-        v[st.RP_CONTACT_MARGIN] = rules.contact_margin
-        v[st.RP_CONE_COS] = rules.fault_cone_cos
-        v[st.RP_BUFFER_SIDE] = rules.buffer_side
-        v[st.RP_BUFFER_BEHIND] = rules.buffer_behind
-        v[st.RP_BEHIND_OVERLAP] = rules.behind_lateral_overlap
-        v[st.RP_LANE_DEADZONE] = rules.lane_deadzone
-        v[st.RP_LAPS] = self.laps
-        v[st.RP_DT] = DT
-        v[st.RP_RAY_RANGE] = sensors.max_range
-        v[st.RP_RAY_ORIGIN] = sensors.origin_forward
-        v[st.RP_LANE_HYSTERESIS] = rules.lane_hysteresis
-        v[st.RP_LANE_COUNTING] = (
-            st.LANE_COUNTING_CHECKPOINT if rules.lane_change_counting == "checkpoint" else st.LANE_COUNTING_PER_STEP
-        )
-        v[st.RP_ALONGSIDE] = rules.alongside_gap
-        v[st.RP_LATERAL_FAULT_SPEED] = rules.lateral_fault_speed
-        return v
 
     # ------------------------------------------------------------------ setup
     @property

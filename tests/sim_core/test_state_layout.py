@@ -3,7 +3,7 @@
 * ``sim_core.kart.P_*`` index the kart vector that :meth:`KartParams.as_array` packs in the order of
   ``KART_PARAM_FIELDS``: each constant must be the index of its field (matched by name, see
   :func:`field_of`), and every field must have one.
-* ``sim_core.state.RP_*`` index the rule vector that ``World._rule_vector`` packs: each must be set there,
+* ``sim_core.state.RP_*`` index the rule vector that ``SimParams.rule_vector`` packs: each must be set there,
   once, and the indices must fill ``0 .. N_RULE - 1``.
 
 A constant that drifts from its field would make the kernels read, say, the braking limit as the top speed,
@@ -20,7 +20,7 @@ import numpy as np
 
 import sim_core.kart as kart_module
 import sim_core.state as state_module
-from sim_core.params import KART_PARAM_FIELDS, KartParams
+from sim_core.params import KART_PARAM_FIELDS, KartParams, SimParams
 from sim_core.track_io import get_track
 from sim_core.world import World
 
@@ -72,8 +72,8 @@ def test_the_packed_kart_vector_holds_each_field_at_its_constant() -> None:
 
 
 def assigned_rule_indices() -> list[str]:
-    """Names of the ``RP_*`` constants that ``World._rule_vector`` assigns to (``v[st.RP_X] = ...``)."""
-    tree = ast.parse(textwrap.dedent(inspect.getsource(World._rule_vector)))
+    """Names of the ``RP_*`` constants that ``SimParams.rule_vector`` assigns to (``v[st.RP_X] = ...``)."""
+    tree = ast.parse(textwrap.dedent(inspect.getsource(SimParams.rule_vector)))
     names: list[str] = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Assign | ast.AugAssign | ast.AnnAssign):
@@ -94,7 +94,7 @@ def test_every_rule_index_constant_is_set_once_by_the_world() -> None:
     assigned = assigned_rule_indices()
     assert sorted(assigned) == sorted(set(assigned)), f"set more than once: {sorted(assigned)}"
     assert set(assigned) == set(rp_constants), (
-        f"never set by World._rule_vector: {sorted(set(rp_constants) - set(assigned))}; "
+        f"never set by SimParams.rule_vector: {sorted(set(rp_constants) - set(assigned))}; "
         f"not in sim_core.state: {sorted(set(assigned) - set(rp_constants))}"
     )
     assert sorted(rp_constants.values()) == list(range(state_module.N_RULE)), "RP_* indices must fill 0..N_RULE-1"
