@@ -90,6 +90,47 @@ def run(
         print_json(summary)
 
 
+@app.command("staircase")
+def staircase_command(
+    ego: Annotated[str, typer.Option(help="the agent that passes")],
+    opponent: Annotated[str, typer.Option(help="the leader, at the staircase's pace")],
+    track: str = "oval",
+    scenario: Annotated[str, typer.Option(help="an overtaking scenario, shipped or a file")] = "overtake-straight",
+    trials: Annotated[int, typer.Option(min=1, max=500)] = 30,
+    start: Annotated[float, typer.Option(help="the first leader pace")] = 0.95,
+    step: Annotated[float, typer.Option(help="the pace step after each trial")] = 0.01,
+    seed: int = 0,
+    as_json: Annotated[bool, typer.Option("--json", help="print the result as JSON, the last line")] = False,
+) -> None:
+    """The pass threshold r50 by a staircase: after a pass the leader gets faster by STEP, after a failure slower;
+    r50 is the mean pace of the reversals after the first two, with a 95% bootstrap interval."""
+    from arena.staircase import pass_staircase
+
+    try:
+        result = pass_staircase(load_scenario_or_exit(scenario), track, ego, opponent, trials, start, step, seed)
+    except (KeyError, ValueError) as exc:
+        error(str(exc).strip("'\""))
+        raise typer.Exit(2) from None
+    marks = " ".join(f"{p:g}{'+' if ok else '-'}" for p, ok in zip(result.paces, result.passed, strict=True))
+    console.print(f"trials (pace, + passed): {marks}")
+    ci = "" if result.ci95 is None else f" [{result.ci95.low:.3f}, {result.ci95.high:.3f}]"
+    r50 = "too few reversals" if result.r50 is None else f"{result.r50:.3f}{ci}"
+    console.print(f"r50 of {ego} behind {opponent} on {track}: {r50} ({len(result.reversals)} reversals)")
+    if as_json:
+        print_json({"ego": ego, "opponent": opponent, "track": track, "scenario": scenario, **result.to_json()})
+
+
+def load_scenario_or_exit(name: str) -> Any:
+    """A scenario by name or path; exit code 2 naming the shipped ones when there is none."""
+    from arena.scenarios import load_scenario
+
+    try:
+        return load_scenario(name)
+    except (KeyError, ValueError) as exc:
+        error(str(exc).strip("'\""))
+        raise typer.Exit(2) from None
+
+
 @app.command()
 def report(
     summary: Annotated[Path, typer.Argument(help="a JSON summary written by `karting scenarios run --out`")],

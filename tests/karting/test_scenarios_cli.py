@@ -48,3 +48,13 @@ def test_bad_names_exit_2_saying_what_was_wrong() -> None:
     assert bad_agent.exit_code == 2 and "unknown controller 'schumacher'" in bad_agent.output
     bad_pace = runner.invoke(app, ["scenarios", "run", "--paces", "1.5"])
     assert bad_pace.exit_code == 2 and "paces must be in [0.5, 1]" in bad_pace.output
+
+
+def test_the_staircase_command_prints_its_trials_and_r50() -> None:
+    args = ["scenarios", "staircase", "--ego", "fixed-lqng", "--opponent", "lane-follower", "--trials", "2"]
+    done = runner.invoke(app, [*args, "--start", "0.8", "--step", "0.05", "--json"])
+    assert done.exit_code == 0, done.output
+    result = json.loads(done.output.strip().splitlines()[-1])
+    assert [t["pace"] for t in result["trials"]] == [0.8, 0.85] and result["r50"] is None  # too few reversals
+    bad = runner.invoke(app, [*args, "--scenario", "defend-straight"])
+    assert bad.exit_code == 2 and "needs an overtaking scenario" in bad.output
