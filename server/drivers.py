@@ -85,7 +85,7 @@ class KartDriver:
         # inputs
         self.steer = 0.0
         self.throttle = 0.0
-        self.fresh_step = 0  # race step whose observation produced the held input (AI)
+        self.fresh_step = -1  # race step whose observation produced the held input (AI; the grid's is step 0)
         self.braking = False
         self.waypoints: tuple[tuple[float, float], ...] = ()  # positions of the active plan's ego waypoints
         self.predicted: tuple[tuple[float, float], ...] = ()  # and of its predictions for the other karts

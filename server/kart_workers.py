@@ -3,7 +3,8 @@
 observations when its controller is due, checked for hangs, and retired when the race ends.
 
 The race session (:mod:`server.session`) owns one :class:`KartWorkers`; nothing here waits for a controller:
-answers are read from each worker's ``latest`` (never blocking the tick).
+answers are read from each worker's ``latest`` (never blocking the tick; a lockstep session polls
+:meth:`KartWorkers.answered` between ticks).
 """
 
 from __future__ import annotations
@@ -59,6 +60,14 @@ class KartWorkers:
             if d.ready and not d.disabled and step % d.every == 0 and not observations[k].me.finished:
                 d.submitted_step = step
                 worker.submit(step, observations[k])
+
+    def answered(self) -> bool:
+        """Whether every working AI kart has answered the last observation handed to it."""
+        for k, worker in self._workers.items():
+            latest, d = worker.latest, self.drivers[k]
+            if not d.disabled and d.submitted_step >= 0 and (latest is None or latest[0] < d.submitted_step):
+                return False
+        return True
 
     def deliver(self, kart: int, plan: Plan) -> None:
         """Make ``plan`` the active plan of kart ``kart``'s controller copy in its worker (if it has one)."""

@@ -1,8 +1,10 @@
 """A race's side of off-tick planning: per kart that plans off the tick (a
 :class:`~controllers.base.PlanningDriver`), its planner is opened in a planner worker before the start, a plan
-is requested whenever the driver wants one, and finished plans are collected at the next tick. A request that
-takes longer than ``plan_timeout_s`` is given up (and a stuck worker replaced); every failure is counted on the
-kart as a planner fault.
+is requested whenever the driver wants one, and finished plans are collected at the next tick, each with the
+race time it becomes due: its request's race time plus the driver's ``plan_latency``, as a headless race applies
+it (:class:`~controllers.hierarchical.HierarchicalController`). A request that takes longer than
+``plan_timeout_s`` is given up (and a stuck worker replaced); every failure is counted on the kart as a planner
+fault.
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ class PlanRequests:
         self.race_id = race_id
         self._pool = pool
         self._timeout = plan_timeout_s
-        self._tasks: dict[int, tuple[asyncio.Task[Plan], float]] = {}  # kart -> (request, wall time sent)
+        # kart -> (request, wall time sent, race time it becomes due)
+        self._tasks: dict[int, tuple[asyncio.Task[Plan], float, float]] = {}
         self._keys: list[str] = []
 
     def _key(self, d: KartDriver) -> str:
@@ -62,11 +65,12 @@ class PlanRequests:
                 continue
             planning.mark_plan_requested(observation.time)
             task = asyncio.get_running_loop().create_task(self._pool.plan(self._key(d), observation))
-            self._tasks[d.index] = (task, now)
+            self._tasks[d.index] = (task, now, observation.time + planning.plan_latency)
 
-    def collect(self, drivers: Sequence[KartDriver]) -> Iterator[tuple[KartDriver, Plan]]:
-        """The plans that came back since the last call, by driver (failed requests are counted instead)."""
-        for kart, (task, _sent) in list(self._tasks.items()):
+    def collect(self, drivers: Sequence[KartDriver]) -> Iterator[tuple[KartDriver, Plan, float]]:
+        """The plans that came back since the last call, by driver, with the race time each becomes due (failed
+        requests are counted instead)."""
+        for kart, (task, _sent, due) in list(self._tasks.items()):
             if not task.done():
                 continue
             del self._tasks[kart]
@@ -78,11 +82,15 @@ class PlanRequests:
                 d.planner_faults += 1
                 d.last_error = f"planner raised {type(exc).__name__}: {exc}"
                 continue
-            yield d, task.result()
+            yield d, task.result(), due
+
+    def due_by(self, race_time: float) -> bool:
+        """Whether a plan due by ``race_time`` is still being computed (it comes back to :meth:`collect`)."""
+        return any(due <= race_time + 1e-9 for _task, _sent, due in self._tasks.values())
 
     def close(self) -> None:
         """Cancel pending requests and forget the race's planners in their workers."""
-        for task, _sent in self._tasks.values():
+        for task, _sent, _due in self._tasks.values():
             task.cancel()
         self._tasks.clear()
         if self._keys:

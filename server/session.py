@@ -52,6 +52,7 @@ from web.frame import RaceFrame
 
 log = logging.getLogger(__name__)
 
+LOCKSTEP_POLL_S = 0.0005  # [s] a lockstep tick polls its controllers' answers this often
 HANG_POLL_S = 0.02  # [s] how often a starting race checks its controllers' resets
 GRID_PUBLISH_S = 0.1  # [s] how often a race waiting for its drivers or counting down publishes a frame
 
@@ -81,6 +82,7 @@ class RaceSession:
         self._stuck = StuckWatch(self.settings)
         self._workers = KartWorkers(race_id, self.drivers, services.hosts, self.settings)  # the AI controllers
         self._plans = PlanRequests(race_id, services.planners, self.settings.plan_timeout_s)
+        self._due: dict[int, tuple[Plan, float]] = {}  # kart -> (plan collected, race time it takes effect)
         self._actions = np.zeros((1, len(self.drivers), 2))
         self._conditions = config.drawn()  # launch delays, grid, start wear and the AI drivers' imprecision
         self._hands = self._conditions.imprecision()
@@ -285,17 +287,32 @@ class RaceSession:
         await self._set_status(RaceStatus.RUNNING)
         loop = asyncio.get_running_loop()
         period = DT / self.settings.speedup
-        self._submit(observe(self.world, 0))  # the first inputs come from the grid
+        grid = observe(self.world, 0)
+        self._submit(grid)  # the first inputs come from the grid, and the first plans, as in a headless race
+        self._plans.request(self.drivers, grid)
         t0 = spread_start(loop.time() + period, period, self.other_starts())
         schedule = self.schedule = TickSchedule(t0, period)
         while True:
             await sleep_until(schedule.deadline)
+            if self.settings.lockstep:
+                await self._await_answers()
             schedule.started(loop.time())
             self._tick()
             schedule.finished(loop.time())
             if self.world.done[0] or self._stop_status is not None:
                 return
             self._end_if_stuck()
+
+    async def _await_answers(self) -> None:
+        """Lockstep: wait until every AI kart answered its last observation and every plan due by the end of this
+        tick has come back, or ``controller_hang_s`` has passed (then the tick goes on as it would without)."""
+        assert self.world is not None
+        due_by = float(self.world.time[0]) + DT
+        limit = time.monotonic() + self.settings.controller_hang_s
+        while not self._workers.answered() or self._plans.due_by(due_by):
+            if time.monotonic() > limit or self._stop_status is not None:
+                return
+            await asyncio.sleep(LOCKSTEP_POLL_S)
 
     def _end_if_stuck(self) -> None:
         """End the race (``finished``, the rest not finished) once no unfinished kart could move for a while
@@ -311,8 +328,8 @@ class RaceSession:
         world = self.world
         assert world is not None
         self._workers.check_hang()
-        for d, plan in self._plans.collect(self.drivers):
-            self._deliver(d, plan)
+        for d, plan, due in self._plans.collect(self.drivers):
+            self._due[d.index] = (plan, due)
         step = int(world.steps[0])
         speeds = world.fstate[0, :, st.F_SPEED]
         now = time.monotonic()
@@ -327,6 +344,7 @@ class RaceSession:
         world.step(self._actions)
         self.laps.observe(world)
         observations = observe(world, 0)
+        self._deliver_due(float(world.time[0]))
         self._submit(observations)
         self._plans.request(self.drivers, observations)
         self.replay.record(world, self._actions[0])
@@ -349,6 +367,14 @@ class RaceSession:
     def _submit(self, observations: Sequence[Observation]) -> None:
         assert self.world is not None
         self._workers.submit(int(self.world.steps[0]), observations)
+
+    def _deliver_due(self, now: float) -> None:
+        """Apply the plans due by race time ``now`` before the trackers see its observation: a plan takes effect
+        its latency after it was asked for, as in a headless race of the same seed, or as it comes if later."""
+        for kart, (plan, due) in list(self._due.items()):
+            if now >= due - 1e-9:
+                del self._due[kart]
+                self._deliver(self.drivers[kart], plan)
 
     def _deliver(self, d: KartDriver, plan: Plan) -> None:
         assert d.planning is not None and self.world is not None

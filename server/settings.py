@@ -61,6 +61,12 @@ class Settings(BaseSettings):
         default=1.0, gt=0.0, description="[s] wall time after which an unanswered controller call is hung"
     )
     controller_reset_s: float = Field(default=20.0, gt=0.0, description="[s] wall time allowed for a driver's reset")
+    lockstep: bool = Field(
+        default=False,
+        description="each tick waits (up to controller_hang_s) for every AI kart's answer to the observation it "
+        "was handed and for every plan due: a live race is then the headless race of its seed, its ticks "
+        "stretching when a controller is slow (default: never wait; a late answer is a missed deadline)",
+    )
     plan_budget_s: float = Field(
         default=0.3,
         gt=0.0,

@@ -7,8 +7,9 @@ conforming to its schema; a request valid under the schema must not get 4xx othe
 
 Seeded: the stateless requests are the same every run (hypothesis ``derandomize``), the stateful suites use
 seeds 0, 1, ... (their later steps follow the server's answers, which depend on timing: a race finished or
-not). POST /api/tournaments is sent invalid bodies only: a valid one starts a tournament of registry agents
-in a worker process for minutes (tests/server/test_server_tournaments.py covers those)."""
+not). POST /api/tournaments and POST /api/scenarios/runs are sent invalid bodies only: a valid one starts races
+of registry agents in the background for minutes (tests/server/test_server_tournaments.py and
+test_server_scenarios.py cover those)."""
 
 from __future__ import annotations
 
@@ -51,8 +52,8 @@ CHECKS = [
     response_headers_conformance,
     response_schema_conformance,
 ]
-# creating tournaments runs them: invalid bodies only (see the module docstring)
-POSITIVE_SKIPPED = {("POST", "/api/tournaments")}
+# creating tournaments and scenario runs runs them: invalid bodies only (see the module docstring)
+POSITIVE_SKIPPED = {("POST", "/api/tournaments"), ("POST", "/api/scenarios/runs")}
 
 
 def _settings(max_examples: int, *, derandomize: bool = True) -> settings:
@@ -144,7 +145,11 @@ def _stop_live_races(base_url: str) -> None:
 def test_stateful_links_create_get_stop_result(
     schema: schemathesis.schemas.BaseSchema, live: LiveServer, sent: Counter[str]
 ) -> None:
-    machine = schema.exclude(method="POST", path="/api/tournaments").as_state_machine()
+    machine = (
+        schema.exclude(method="POST", path="/api/tournaments")
+        .exclude(method="POST", path="/api/scenarios/runs")
+        .as_state_machine()
+    )
     failures: list[str] = []
 
     class Recorded(machine):  # type: ignore[misc, valid-type]

@@ -40,7 +40,7 @@ def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[httpx.Client]:
         ({"agents": ["e2e", "fixed-lqng:fast"]}, ["body", "agents"], "'fast' is not KEY=VALUE"),
         ({"races_per_pair": 0}, ["body", "races_per_pair"], "greater than or equal to 1"),
         ({"id": "bad id!"}, ["body", "id"], "should match pattern"),
-        ({"conditions": "wet"}, ["body", "conditions"], "Input should be 'paper' or 'varied'"),
+        ({"conditions": "wet"}, ["body", "conditions"], "Input should be 'paper', 'varied' or 'varied-pace'"),
     ],
 )
 def test_bad_tournaments_are_422_saying_what_was_wrong(
