@@ -42,8 +42,10 @@ def test_a_scenario_run_from_the_page(scenario_server: str) -> None:
         page.get_by_label("paces").fill("0.8")
         page.get_by_label("attempts per cell").fill("1")
         page.get_by_role("button", name="Start run").click()
-        page.locator("#launch-msg.ok").wait_for()
-        run_id = page.locator("#run-id").inner_text()
+        started = page.locator("#launch-msg.ok")
+        started.wait_for()
+        run_id = started.inner_text().removeprefix("Run ").removesuffix(" started.")
+        page.wait_for_function("id => document.getElementById('run-id').textContent === id", arg=run_id)
         deadline = time.monotonic() + 120
         while page.locator("#cell-rows td").count() < 10:
             assert time.monotonic() < deadline, "the run's figures never came"
