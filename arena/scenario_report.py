@@ -40,8 +40,18 @@ def cell_row(cell: dict[str, Any]) -> list[str]:
 
 def markdown_report(summary: dict[str, Any], wall_seconds: float | None = None) -> str:
     """A stored run (:meth:`SuiteResult.to_json`) as Markdown tables."""
-    head = ["scenario", "track", "ego", "opponent", "pace", "attempts", "success [95% CI]", "time to pass [s]",
-            "collisions at fault / attempt", "illegal lane changes / attempt"]  # fmt: skip
+    head = [
+        "scenario",
+        "track",
+        "ego",
+        "opponent",
+        "pace",
+        "attempts",
+        "success [95% CI]",
+        "time to pass [s]",
+        "collisions at fault / attempt",
+        "illegal lane changes / attempt",
+    ]
     took = "" if wall_seconds is None else f" ({wall_seconds / 60:.0f} minutes here)"
     thresholds = [
         [ego, opponent, "below every pace" if r50 is None else f"{r50:g}"]

@@ -394,8 +394,13 @@ def pass_thresholds(figures: Sequence[CellFigures]) -> dict[str, dict[str, float
     return found
 
 
-def cells_of(scenario: Scenario, egos: Sequence[str], opponents: Sequence[str], tracks: Sequence[str] | None = None,
-             paces: Sequence[float] | None = None) -> list[Cell]:  # fmt: skip
+def cells_of(
+    scenario: Scenario,
+    egos: Sequence[str],
+    opponents: Sequence[str],
+    tracks: Sequence[str] | None = None,
+    paces: Sequence[float] | None = None,
+) -> list[Cell]:
     """Every cell of ``scenario`` for these egos and opponents (an ego never against itself), on its tracks and
     paces unless given; ``ValueError``/``KeyError`` for a bad agent."""
     for agent in (*egos, *opponents):

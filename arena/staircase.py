@@ -65,9 +65,15 @@ def staircase(
 
 
 def pass_staircase(
-    scenario: Scenario, track: str, ego: str, opponent: str, trials: int, start: float = 0.95, step: float = 0.01,
+    scenario: Scenario,
+    track: str,
+    ego: str,
+    opponent: str,
+    trials: int,
+    start: float = 0.95,
+    step: float = 0.01,
     seed: int = 0,
-) -> Staircase:  # fmt: skip
+) -> Staircase:
     """The overtaking staircase of ``ego`` behind ``opponent`` on ``track``: trial ``i`` is attempt ``i`` of the
     scenario's cell at that trial's leader pace (its own seed, gap and conditions)."""
     if scenario.kind != "overtake":

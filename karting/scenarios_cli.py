@@ -72,11 +72,17 @@ def run(
     summary["command"] = " ".join(
         f"--{name} {value}"
         for name, value in (
-            ("scenarios", scenarios), ("egos", egos), ("opponents", opponents), ("tracks", tracks),
-            ("paces", paces), ("attempts", attempts), ("seed", seed), ("publish", publish),
+            ("scenarios", scenarios),
+            ("egos", egos),
+            ("opponents", opponents),
+            ("tracks", tracks),
+            ("paces", paces),
+            ("attempts", attempts),
+            ("seed", seed),
+            ("publish", publish),
         )
         if value is not None
-    )  # fmt: skip
+    )
     _show(summary)
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)

@@ -81,6 +81,13 @@ def build_world(config: RaceConfig, params: SimParams, drawn: RaceConditions, hu
 
 def driver_context(config: RaceConfig, world: World, kart: int) -> RaceContext:
     """What the driver of ``kart`` learns at the start: the track, its kart at its pace, and its seed."""
-    context = RaceContext(config.track, world.kart_params(0, kart), kart, len(config.karts), world.lane_change_limit,
-                          config.seed * 1000 + kart, float(world.paces[0, kart]))  # fmt: skip
+    context = RaceContext(
+        config.track,
+        world.kart_params(0, kart),
+        kart,
+        len(config.karts),
+        world.lane_change_limit,
+        config.seed * 1000 + kart,
+        float(world.paces[0, kart]),
+    )
     return context

@@ -170,10 +170,21 @@ class ScenarioRunner:
     def _run(self, run_id: str, request: ScenarioRequest, plans: list[tuple[Scenario, list[Any]]]) -> None:
         try:
             runs = tuple(
-                (s, tuple(run_cells(s, cells, request.attempts, request.seed, workers=self.workers,
-                                    should_stop=self._stop.is_set)))
+                (
+                    s,
+                    tuple(
+                        run_cells(
+                            s,
+                            cells,
+                            request.attempts,
+                            request.seed,
+                            workers=self.workers,
+                            should_stop=self._stop.is_set,
+                        )
+                    ),
+                )
                 for s, cells in plans
-            )  # fmt: skip
+            )
         except RunStoppedError as exc:
             self.store.finish(run_id, ScenarioRunStatus.STOPPED, None, str(exc))
             return
