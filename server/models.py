@@ -48,11 +48,18 @@ BoundedParamValue = (
 )
 
 
-def _not_a_bool(value: object) -> object:
-    """JSON's true and false are not integers (pydantic's lax mode would read them as 1 and 0)."""
+def not_a_bool(value: object) -> object:
+    """JSON's true and false are not numbers (pydantic's lax mode would read them as 1 and 0)."""
     if isinstance(value, bool):
-        raise ValueError("must be an integer, not a boolean")
+        raise ValueError("must be a number, not a boolean")
     return value
+
+
+# a request's numbers: JSON numbers only (2.0 is the integer 2, as JSON Schema has it; true is not 1). Bounds go in
+# the field's Field(...); inside a list or an optional field, Annotated[int, Field(...), BeforeValidator(not_a_bool)]
+# (bounds first, or the schema loses them)
+JsonInt = Annotated[int, BeforeValidator(not_a_bool)]
+JsonFloat = Annotated[float, BeforeValidator(not_a_bool)]
 
 
 class ErrorOut(BaseModel):
@@ -100,7 +107,7 @@ class KartIn(BaseModel):
         max_length=MAX_PARAMS,
         description="controller parameters to change (names from GET /api/controllers)",
     )
-    pace: float = Field(
+    pace: JsonFloat = Field(
         1.0,
         ge=MIN_PACE,
         le=1.0,
@@ -115,11 +122,11 @@ class RaceIn(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     track: str = Field(min_length=1, max_length=MAX_NAME_CHARS, description="a name from GET /api/tracks")
-    laps: int | None = Field(
-        None, ge=MIN_LAPS, le=MAX_LAPS, description="default: the track's laps; at most GET /api/limits"
+    laps: Annotated[int, Field(ge=MIN_LAPS, le=MAX_LAPS), BeforeValidator(not_a_bool)] | None = Field(
+        None, description="default: the track's laps; at most GET /api/limits"
     )
-    seed: int = Field(0, ge=0, le=MAX_SEED, description="seed of the planners")
-    start_lanes: list[Annotated[int, Field(ge=1, le=MAX_LANES), BeforeValidator(_not_a_bool)]] | None = Field(
+    seed: JsonInt = Field(0, ge=0, le=MAX_SEED, description="seed of the planners")
+    start_lanes: list[Annotated[int, Field(ge=1, le=MAX_LANES), BeforeValidator(not_a_bool)]] | None = Field(
         None,
         min_length=1,
         max_length=MAX_KARTS,

@@ -10,13 +10,13 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, status
 from fastapi.exceptions import RequestValidationError
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
 from arena.scenarios import load_scenario, shipped_scenarios
 from controllers.registry import PACE_SEPARATOR, validate_agent
 from server.deps import API_KEY_RESPONSES, ApiKey, ScenarioRuns
 from server.limits import MAX_SEED
-from server.models import ErrorOut, Name
+from server.models import ErrorOut, JsonInt, Name, not_a_bool
 from server.scenario_runs import ScenarioRequest, StoredScenarioRun
 from server.strict_json import StrictJSONRoute
 from sim_core.params import MIN_PACE
@@ -50,11 +50,11 @@ class ScenarioRunIn(BaseModel):
     egos: list[Name] = Field(min_length=1, max_length=8, description="agents (GET /api/controllers, NAME:KEY=VALUE)")
     opponents: list[Name] = Field(min_length=1, max_length=8, description="agents; an ego never meets itself")
     tracks: list[Name] | None = Field(None, min_length=1, max_length=8, description="default: each scenario's")
-    paces: list[Annotated[float, Field(ge=MIN_PACE, le=1.0)]] | None = Field(
+    paces: list[Annotated[float, Field(ge=MIN_PACE, le=1.0), BeforeValidator(not_a_bool)]] | None = Field(
         None, min_length=1, max_length=10, description="default: each scenario's ladder"
     )
-    attempts: int = Field(10, ge=1, le=MAX_ATTEMPTS, description="seeded attempts per cell")
-    seed: int = Field(0, ge=0, le=MAX_SEED)
+    attempts: JsonInt = Field(10, ge=1, le=MAX_ATTEMPTS, description="seeded attempts per cell")
+    seed: JsonInt = Field(0, ge=0, le=MAX_SEED)
 
 
 class ScenarioRunOut(BaseModel):

@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import asyncio
 from datetime import datetime
-from typing import Any
+from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, Response, status
 from fastapi.exceptions import RequestValidationError
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator
 
 from arena.records import RaceFigures
 from arena.report import (
@@ -31,7 +31,7 @@ from arena.stats import COMBINED, Standing, leaderboard, tournament_stats
 from arena.tournament import TournamentSpec
 from server.deps import API_KEY_RESPONSES, ApiKey, TournamentPlotsDep, Tournaments
 from server.limits import MAX_SEED
-from server.models import ErrorOut, ManifestOut, Name
+from server.models import ErrorOut, JsonInt, ManifestOut, Name, not_a_bool
 from server.strict_json import StrictJSONRoute
 from server.tournament_db import TOURNAMENT_ID, StoredTournament, TournamentRace
 from server.tournaments import TooManyTournamentsError, TournamentConflictError, TournamentRunner
@@ -54,10 +54,14 @@ class TournamentIn(BaseModel):
         description="names from GET /api/controllers, each optionally with parameters: NAME:KEY=VALUE:...",
     )
     tracks: list[Name] = Field(default=["oval", "complex"], min_length=1, max_length=8)
-    races_per_pair: int = Field(default=50, ge=1, le=MAX_RACES_PER_PAIR, description="per pair and track")
-    seed: int = Field(default=0, ge=0, le=MAX_SEED)
-    laps: int | None = Field(default=None, ge=1, le=20, description="default: each track's")
-    time_limit: float | None = Field(default=None, gt=0.0, le=3600.0, description="[s] default: the rules'")
+    races_per_pair: JsonInt = Field(default=50, ge=1, le=MAX_RACES_PER_PAIR, description="per pair and track")
+    seed: JsonInt = Field(default=0, ge=0, le=MAX_SEED)
+    laps: Annotated[int, Field(ge=1, le=20), BeforeValidator(not_a_bool)] | None = Field(
+        default=None, description="default: each track's"
+    )
+    time_limit: Annotated[float, Field(gt=0.0, le=3600.0), BeforeValidator(not_a_bool)] | None = Field(
+        default=None, description="[s] default: the rules'"
+    )
     kart_preset: str = Field(default="paper", pattern="^(paper|original)$")
     conditions: ConditionName = Field(
         default="varied",

@@ -32,6 +32,7 @@ def test_the_shipped_scenarios_are_listed(client: httpx.Client) -> None:
         ({"paces": [0.2]}, ["body", "paces", 0], "greater than or equal to 0.5"),
         ({"opponents": ["fixed-lqng"]}, ["body", "opponents"], "0 cells"),
         ({"attempts": 0}, ["body", "attempts"], "greater than or equal to 1"),
+        ({"seed": False}, ["body", "seed"], "must be a number, not a boolean"),
     ],
 )
 def test_a_bad_run_is_a_422_naming_what_was_wrong(

@@ -39,6 +39,8 @@ def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[httpx.Client]:
         ({"agents": ["e2e", "fixed-lqng:pace=1"]}, ["body", "agents"], "'pace' is unknown"),
         ({"agents": ["e2e", "fixed-lqng:fast"]}, ["body", "agents"], "'fast' is not KEY=VALUE"),
         ({"races_per_pair": 0}, ["body", "races_per_pair"], "greater than or equal to 1"),
+        ({"races_per_pair": True}, ["body", "races_per_pair"], "must be a number, not a boolean"),
+        ({"agents": ["e2e", "fixed-lqng@0.2"]}, ["body", "agents"], "pace must be in [0.5, 1]"),
         ({"id": "bad id!"}, ["body", "id"], "should match pattern"),
         ({"conditions": "wet"}, ["body", "conditions"], "Input should be 'paper', 'varied' or 'varied-pace'"),
     ],
