@@ -8,9 +8,11 @@ How the check itself fails (a changed default, an edited table, a table without 
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
-from arena.reproduce import reproduction_problems
+from arena.publish import published_problems
+from arena.reproduce import reproduction_problems, stale_conditions
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
@@ -20,3 +22,26 @@ README = ROOT / "README.md"
 def test_the_published_results_are_those_of_the_current_agents() -> None:
     problems = reproduction_problems(RESULTS, README)
     assert problems == [], "stale or unpublished results:\n" + "\n".join(problems)
+
+
+def _published_tournaments() -> list[Path]:
+    """Every folder under docs/results/ holding a published tournament, besides the reproduction's two."""
+    found = []
+    for manifest in sorted(RESULTS.rglob("manifest.json")):
+        folder = manifest.parent
+        if folder.parent == RESULTS and folder.name in ("paper", "varied"):
+            continue
+        if json.loads(manifest.read_text()).get("kind") == "tournament":
+            found.append(folder)
+    return found
+
+
+def test_every_other_published_tournament_is_of_the_current_agents_and_conditions() -> None:
+    folders = _published_tournaments()
+    assert folders, "no other published tournament found: the check would pass on nothing"
+    problems = []
+    for folder in folders:
+        conditions = json.loads((folder / "manifest.json").read_text())["conditions"]["conditions"]["name"]
+        problems += [f"{folder}: {p}" for p in published_problems(folder, None)]
+        problems += [f"{folder}: {p}" for p in stale_conditions(folder, conditions)]
+    assert problems == [], "stale published tournaments:\n" + "\n".join(problems)
