@@ -195,13 +195,13 @@ def attempt_seed(scenario: str, track: str, attempt: int, seed: int) -> int:
     return int(np.random.SeedSequence([seed, attempt, *digest]).generate_state(1)[0] % 2**31)
 
 
-def attempt_specs(scenario: Scenario, cell: Cell, attempts: int, seed: int = 0) -> list[RaceSpec]:
-    """The races of ``attempts`` attempts of ``cell`` (the ego is kart 0)."""
+def attempt_specs(scenario: Scenario, cell: Cell, attempts: int, seed: int = 0, first: int = 0) -> list[RaceSpec]:
+    """The races of attempts ``first`` to ``first + attempts - 1`` of ``cell`` (the ego is kart 0)."""
     track = load_any_track(cell.track)
     ego, opponent = cell.agents(scenario.kind)
     leader_pace = cell.pace if scenario.kind == "overtake" else 1.0
     specs = []
-    for i in range(attempts):
+    for i in range(first, first + attempts):
         race_seed = attempt_seed(scenario.name, cell.track, i, seed)
         gap = float(np.random.default_rng([race_seed, 0x6A9]).uniform(*scenario.gap_m))
         lead, follow = placements(scenario, track, gap, leader_pace)

@@ -80,7 +80,7 @@ def pass_staircase(
         raise ValueError(f"a pass staircase needs an overtaking scenario, {scenario.name!r} is {scenario.kind!r}")
 
     def attempt(pace: float, i: int) -> bool:
-        spec = attempt_specs(scenario, Cell(scenario.name, track, ego, opponent, pace), i + 1, seed)[i]
+        (spec,) = attempt_specs(scenario, Cell(scenario.name, track, ego, opponent, pace), 1, seed, first=i)
         first: list[int] = []
 
         def note(world: World, _drivers: object, step_: int) -> None:
