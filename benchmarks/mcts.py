@@ -16,6 +16,7 @@ import statistics
 import time
 
 from controllers.racing_line import optimise_racing_line
+from controllers.tactical import rules
 from controllers.tactical.planner import PlayerState, TacticalPlanner
 from sim_core.params import PAPER_KART
 from sim_core.track_io import get_track
@@ -25,7 +26,14 @@ def players(checkpoint: int) -> list[PlayerState]:
     return [
         PlayerState(kart=0, checkpoint=checkpoint, lane=2, speed=11.0, time=20.0, wear=0.3, lane_changes=0),
         PlayerState(
-            kart=1, checkpoint=checkpoint, lane=3, speed=12.0, time=20.15, wear=0.3, lane_changes=1, modelled=True
+            kart=1,
+            checkpoint=checkpoint,
+            lane=3,
+            speed=12.0,
+            time=20.15,
+            wear=0.3,
+            lane_changes=1,
+            model=rules.MODEL_LINE,
         ),
     ]
 

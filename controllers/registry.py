@@ -51,8 +51,17 @@ from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController, LaneFollowerParams
 from controllers.lq.presets import fixed_line_tracker, mcts_tracker
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
-from controllers.rl.agents import E2EParams, FixedRLParams, MCTSRLParams, build_e2e, build_fixed_rl, build_mcts_rl
-from controllers.tactical.high_level import HOLD_GAIN, MCTSPlanner, TacticalParams
+from controllers.rl.agents import (
+    E2EParams,
+    FixedRLParams,
+    MCTSRLAdaptiveParams,
+    MCTSRLParams,
+    build_e2e,
+    build_fixed_rl,
+    build_mcts_rl,
+    build_mcts_rl_adaptive,
+)
+from controllers.tactical.high_level import HOLD_GAIN, AdaptiveOpponentParams, MCTSPlanner, TacticalParams
 from sim_core.params import MIN_PACE
 
 P = TypeVar("P")
@@ -118,6 +127,11 @@ class MCTSLQNGParams(TacticalParams):
 
 
 @dataclass(frozen=True)
+class MCTSLQNGAdaptiveParams(MCTSLQNGParams, AdaptiveOpponentParams):
+    """Public parameters of ``mcts-lqng-adaptive``: ``mcts-lqng``'s and the opponent models it chooses from."""
+
+
+@dataclass(frozen=True)
 class FixedLQNGParams:
     """Public parameters of ``fixed-lqng``."""
 
@@ -139,6 +153,11 @@ def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
     return HierarchicalController("mcts-lqng", search, mcts_tracker(params.lqng_horizon_steps))
 
 
+def _mcts_lqng_adaptive(params: MCTSLQNGAdaptiveParams) -> Controller:
+    search = MCTSPlanner.from_settings(params, hold_gain=params.hold_gain_s)
+    return HierarchicalController("mcts-lqng-adaptive", search, mcts_tracker(params.lqng_horizon_steps))
+
+
 def _fixed_lqng(params: FixedLQNGParams) -> Controller:
     planner = FixedLinePlanner(margin=params.line_margin_m)
     tracker = fixed_line_tracker(params.lqng_horizon_steps, params.speed_scale)
@@ -151,6 +170,13 @@ _SPECS: tuple[ControllerSpec[Any], ...] = (
         "MCTS tactical planner (1 Hz, 2,000 iterations, horizon 8) tracked by the LQ Nash game tracker (50 Hz).",
         _mcts_lqng,
         MCTSLQNGParams,
+    ),
+    _spec(
+        "mcts-lqng-adaptive",
+        "mcts-lqng playing each other kart in its game by the opponent model (racing line, held lane, best "
+        "response, own last lap, a fixed-line agent simulated) that has forecast that kart's lanes best so far.",
+        _mcts_lqng_adaptive,
+        MCTSLQNGAdaptiveParams,
     ),
     _spec(
         "fixed-lqng",
@@ -169,6 +195,13 @@ _SPECS: tuple[ControllerSpec[Any], ...] = (
         "MCTS tactical planner (1 Hz) tracked by a PPO self-play policy deciding at 25 Hz (the paper's MCTS-RL).",
         build_mcts_rl,
         MCTSRLParams,
+    ),
+    _spec(
+        "mcts-rl-adaptive",
+        "mcts-rl playing each other kart in its game by the opponent model that has forecast that kart's lanes "
+        "best so far (as mcts-lqng-adaptive).",
+        build_mcts_rl_adaptive,
+        MCTSRLAdaptiveParams,
     ),
     _spec(
         "fixed-rl",

@@ -30,7 +30,7 @@ from controllers.hierarchical import HierarchicalController
 from controllers.parameters import parameter
 from controllers.rl.filters import KeepDistance, LineSpeedCeiling, RecoverFromStall
 from controllers.rl.tracker import RLTracker
-from controllers.tactical.high_level import MCTSPlanner, TacticalParams
+from controllers.tactical.high_level import AdaptiveOpponentParams, MCTSPlanner, TacticalParams
 from sim_core.observation import Observation
 
 RL_RATE_HZ = 50.0  # called every step; the tracker itself decides at 25 Hz and holds its action
@@ -64,6 +64,11 @@ class MCTSRLParams(TacticalParams):
 
 
 @dataclass(frozen=True)
+class MCTSRLAdaptiveParams(MCTSRLParams, AdaptiveOpponentParams):
+    """Public parameters of ``mcts-rl-adaptive``: ``mcts-rl``'s and the opponent models it chooses from."""
+
+
+@dataclass(frozen=True)
 class FixedRLParams:
     """Public parameters of ``fixed-rl``."""
 
@@ -86,7 +91,7 @@ def _rl_filters(line_margin: float, ceiling_margin: float, lookahead: float) -> 
     return (LineSpeedCeiling(ceiling_margin, line_margin), KeepDistance(lookahead), RecoverFromStall())
 
 
-def build_mcts_rl(params: MCTSRLParams) -> Controller:
+def build_mcts_rl(params: MCTSRLParams, name: str = "mcts-rl") -> Controller:
     """MCTS planner + RL tracker."""
     planner = MCTSPlanner.from_settings(
         params,
@@ -96,7 +101,12 @@ def build_mcts_rl(params: MCTSRLParams) -> Controller:
         planned_speeds_behind=False,
     )
     filters = _rl_filters(1.0, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
-    return HierarchicalController("mcts-rl", planner, RLTracker("mcts-rl", filters=filters), rate_hz=RL_RATE_HZ)
+    return HierarchicalController(name, planner, RLTracker("mcts-rl", filters=filters), rate_hz=RL_RATE_HZ)
+
+
+def build_mcts_rl_adaptive(params: MCTSRLAdaptiveParams) -> Controller:
+    """``mcts-rl`` with opponent models chosen by measured error."""
+    return build_mcts_rl(params, "mcts-rl-adaptive")
 
 
 def build_fixed_rl(params: FixedRLParams) -> Controller:

@@ -20,6 +20,7 @@ from sim_core.track import Track
 
 TIME_UNITS_PER_S = 100  # time states are integers in 0.01 s
 WEAR_UNITS = 10_000  # tyre wear states are integers in 1e-4
+MAX_SCRIPTS = 8  # players of one game whose lanes an opponent model scripts per checkpoint (the most karts in a race)
 
 
 @dataclass(frozen=True)
@@ -71,6 +72,7 @@ class GameTables(NamedTuple):
     penalty: np.ndarray  # (N, lanes, lanes) [0.01 s] time added to a section (off the racing line, lane changes)
     lane_offset: np.ndarray  # (N, lanes) [m] left-positive lateral offsets of the lanes at each checkpoint
     predicted_lane: np.ndarray  # (N,) 0-based lane a modelled (line-following) player takes at checkpoint c; -1 none
+    scripted_lane: np.ndarray  # (MAX_SCRIPTS, N) 0-based lane of each scripted player at checkpoint c; -1 none
     collision_distance: float  # [m] 0 disables the along-the-section check
     lateral_clearance: float  # [m]
     alongside_distance: float  # [m]
@@ -132,6 +134,7 @@ def build_tables(track: Track, kart: KartParams, params: GameParams, lane_limit:
         penalty=np.zeros((n, lanes, lanes)),
         lane_offset=np.array([track.lane_offsets(c) for c in range(n)], dtype=float),
         predicted_lane=np.full(n, -1, dtype=np.int64),
+        scripted_lane=np.full((MAX_SCRIPTS, n), -1, dtype=np.int64),
         collision_distance=float(params.collision_distance) if params.collision_pruning else 0.0,
         lateral_clearance=float(params.lateral_clearance),
         alongside_distance=float(params.alongside_distance),

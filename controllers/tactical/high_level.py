@@ -20,6 +20,8 @@ from controllers.parameters import parameter
 from controllers.plan import Plan, Waypoint
 from controllers.racing_line import RacingLine, optimise_racing_line
 from controllers.tactical.game import GameParams
+from controllers.tactical.opponents import ADAPTIVE_MODELS, OpponentModelSelector, model_names
+from controllers.tactical.opponents import RacingLine as RacingLineModel
 from controllers.tactical.pace import PaceMeter
 from controllers.tactical.planner import PlayerState, TacticalPlanner
 from sim_core.observation import KartView, Observation
@@ -63,6 +65,18 @@ class TacticalParams:
     )
 
 
+@dataclass(frozen=True)
+class AdaptiveOpponentParams(TacticalParams):
+    """:class:`TacticalParams` with the opponent models the game chooses from per kart by measured error."""
+
+    opponent_models: str = parameter(
+        ADAPTIVE_MODELS,
+        "opponent models the tactical game plays each other kart by, the one with the fewest missed lane forecasts "
+        "for that kart so far, joined by '+' (racing-line, holds-lane, game, own-last-lap, simulated-AGENT; the "
+        "first until measured)",
+    )
+
+
 def lanes_legal(track: Track, lane: int, count: int, waypoints: list[Waypoint], limit: int) -> bool:
     """Whether driving through ``waypoints`` from ``lane`` (lane-change counter ``count``) breaks no rule
     (eqs. (10) gen_lane_var and (11) gen_lane_lim, the referee's :func:`~sim_core.rules.lane_change_update`)."""
@@ -99,6 +113,7 @@ class MCTSPlanner:
         planned_speeds_behind: bool = True,
         pace_model: bool = False,
         own_pace: float = 1.0,
+        opponent_models: tuple[str, ...] = (RacingLineModel.name,),
     ) -> None:
         if lane_change_slack < 0:
             raise ValueError("lane_change_slack must be >= 0")
@@ -127,6 +142,9 @@ class MCTSPlanner:
         # ego's is ``own_pace`` until it has one, another kart's the ego's until it has one
         self.pace_model = pace_model
         self.own_pace = own_pace
+        # how the game plays each other kart: the model of these with the fewest missed lanes for that kart so far
+        # (controllers.tactical.opponents; the first until measured)
+        self.opponents = OpponentModelSelector.of(opponent_models)
         self._pace: PaceMeter | None = None
         self._planner: TacticalPlanner | None = None
         self._context: RaceContext | None = None
@@ -143,8 +161,12 @@ class MCTSPlanner:
         planned_speeds_behind: bool = True,
         hold_gain: float | None = None,
     ) -> MCTSPlanner:
-        """The planner of a registered agent's ``settings``: the racing line unless the search gains, and every
-        kart timed by its measured pace."""
+        """The planner of a registered agent's ``settings``: the racing line unless the search gains, every kart
+        timed by its measured pace and played by the opponent models of ``settings`` (the racing line's
+        without)."""
+        opponent_models: tuple[str, ...] = (RacingLineModel.name,)
+        if isinstance(settings, AdaptiveOpponentParams):
+            opponent_models = model_names(settings.opponent_models)
         return cls(
             iterations=settings.iterations,
             rate_hz=settings.planner_rate_hz,
@@ -155,6 +177,7 @@ class MCTSPlanner:
             planned_speeds_behind=planned_speeds_behind,
             pace_model=True,
             own_pace=settings.own_pace,
+            opponent_models=opponent_models,
         )
 
     @property
@@ -179,6 +202,7 @@ class MCTSPlanner:
         self._line = optimise_racing_line(context.track, context.kart)
         self._line_lanes = self._line.checkpoint_lanes
         self._committed = {}
+        self.opponents.reset(context.track, self._line_lanes)
         self._pace = PaceMeter.of(context.track, self._line) if self.pace_model else None
         self._planner = TacticalPlanner(
             context.track,
@@ -228,9 +252,15 @@ class MCTSPlanner:
             time=now + 2.0 * distance / max(v0 + v1, 0.5),
             wear=kart.wear,
             lane_changes=count,
-            modelled=kart.index != ego,
             pace=self.pace_of(kart.index, ego),
         )
+
+    def _with_model(self, player: PlayerState, kart: KartView, ego: int) -> PlayerState:
+        """``player`` played by the opponent model chosen for its kart (the ego searches)."""
+        if kart.index == ego:
+            return player
+        model = self.opponents.model_of(kart.index).in_game(kart)
+        return replace(player, model=model.code, script=model.lanes)
 
     def pace_of(self, kart: int, ego: int) -> float:
         """The pace the game gives ``kart`` (1 without the pace model): its measured one, else the ego's."""
@@ -292,12 +322,18 @@ class MCTSPlanner:
         assert self._planner is not None and self._context is not None, "reset() first"
         if self._pace is not None:
             self._pace.observe(observation.karts, self._context.track)
+        ego = observation.ego
+        others = [k for k in observation.karts if k.index != ego]
+        self.opponents.score(others)
         players = [
-            self.present_state(k, observation.time, observation.ego)
+            self._with_model(self.present_state(k, observation.time, ego), k, ego)
             for k in observation.karts
-            if not k.finished or k.index == observation.ego
+            if not k.finished or k.index == ego
         ]
-        plan = self._planner.plan(players, observation.ego, self._committed)
+        if len(self.opponents.models) > 1:
+            planner = self._planner
+            self.opponents.forecast(others, lambda kart: planner.best_response_lanes(players, ego, kart))
+        plan = self._planner.plan(players, ego, self._committed)
         me = next(p for p in players if p.kart == observation.ego)
         plan = self._fill_skipped(plan, me)
         if self.racing_line:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -39,7 +39,8 @@ class PlayerState:
     time: float  # [s] race time of that crossing
     wear: float  # [-] tyre wear at that crossing
     lane_changes: int  # the referee's eq. (10) gen_lane_var counter
-    modelled: bool = False  # the player follows the opponent model (the racing line's lanes) instead of searching
+    model: int = rules.MODEL_FREE  # how the game plays it: searched, or an opponent model's lanes (rules.MODEL_*)
+    script: tuple[int, ...] = ()  # with rules.MODEL_SCRIPT: its 0-based lane at each checkpoint of a lap (-1: none)
     pace: float = 1.0  # [-] its section times over the game's model of the kart (controllers.tactical.pace)
 
 
@@ -86,6 +87,7 @@ class TacticalPlanner:
         self._plans = 0
         self._tree: SearchTree | None = None
         self._tree_root: np.ndarray | None = None
+        self._tree_scripts: np.ndarray | None = None
         self._lane_points: dict[tuple[int, int], tuple[float, float]] = {}
 
     def reset(self) -> None:
@@ -117,12 +119,18 @@ class TacticalPlanner:
         chosen = [me] + [p for p in players if p.kart != ego and abs(p.checkpoint - me.checkpoint) < window]
         leader_cp = max(p.checkpoint for p in chosen)
         state = np.zeros((len(chosen), rules.N_FIELDS), dtype=np.int64)
+        scripts = np.full_like(self.tables.scripted_lane, -1)
         times = []
         for row, p in enumerate(chosen):
             state[row, rules.CHECKPOINT] = p.checkpoint
             state[row, rules.LANE] = p.lane - 1
             state[row, rules.PREV_LANE] = p.lane - 1
-            state[row, rules.MODELLED] = int(p.modelled and p.kart != ego)
+            if p.kart != ego and p.model >= rules.MODEL_SCRIPT:
+                slot = row - 1  # the ego is row 0 and never scripted
+                scripts[slot] = p.script
+                state[row, rules.MODELLED] = rules.MODEL_SCRIPT + slot
+            elif p.kart != ego:
+                state[row, rules.MODELLED] = p.model
             state[row, rules.BIN] = self.speed_bin(p.speed)
             state[row, rules.WEAR] = round(min(max(p.wear, 0.0), 1.0) * WEAR_UNITS)
             state[row, rules.LANE_COUNT] = p.lane_changes
@@ -133,7 +141,23 @@ class TacticalPlanner:
         for row, t in enumerate(times):
             state[row, rules.TIME] = round((t - earliest) * TIME_UNITS_PER_S)
             state[row, rules.PREV_TIME] = state[row, rules.TIME]
+        self.tables = self.tables._replace(scripted_lane=scripts)
         return state, [p.kart for p in chosen]
+
+    def best_response_lanes(self, players: Sequence[PlayerState], ego: int, kart: int) -> dict[int, int]:
+        """``kart``'s 1-based lane at each checkpoint of the game played on from the present with no search,
+        ``kart`` playing freely (its fastest legal moves) and everyone else by their models (the ego too: the
+        racing line); empty when ``kart`` is outside the ego's game. Sets the tables' scripts like
+        :meth:`root_state` (call it before the plan's own root)."""
+        freed = [replace(p, model=rules.MODEL_FREE, script=()) if p.kart == kart else p for p in players]
+        root, karts = self.root_state(freed, ego)
+        if kart not in karts:
+            return {}
+        row = karts.index(kart)
+        bins = len(self.tables.bin_low)
+        root_cp = int(root[0, rules.CHECKPOINT])
+        moves, _ = self._playout(root, root_cp, root_cp, None)
+        return {int(state[row, rules.CHECKPOINT]): action // bins + 1 for mover, action, state in moves if mover == row}
 
     def _advance(self, row: np.ndarray, checkpoint: int, speed: float) -> float:
         """Move one player's state ``row`` (in place) forward to ``checkpoint`` in its own lane by the game's
@@ -187,7 +211,13 @@ class TacticalPlanner:
         horizon = self.params.horizon
         tb = self.tables
         max_actions = len(tb.bin_low) * tb.distance.shape[1]
-        reuse = self._tree is not None and self._tree_root is not None and np.array_equal(self._tree_root, root)
+        reuse = (
+            self._tree is not None
+            and self._tree_root is not None
+            and self._tree_scripts is not None
+            and np.array_equal(self._tree_root, root)
+            and np.array_equal(self._tree_scripts, self.tables.scripted_lane)
+        )
         budget = self.iterations
         needed = (self._tree.size if reuse and self._tree is not None else 0) + budget + 1
         if reuse and self._tree is not None and self._tree.capacity < needed:
@@ -202,6 +232,7 @@ class TacticalPlanner:
         tree.run(tb, root, horizon, budget, seed, self.exploration, self.greedy, resume=reuse)
         seconds = time.perf_counter() - t0
         self._tree_root = root.copy()
+        self._tree_scripts = self.tables.scripted_lane.copy()
         return self._extract(tree, karts, ego, int(root[0, rules.CHECKPOINT]), budget, seconds, committed or {})
 
     def _principal_variation(self, tree: SearchTree, committed: dict[int, int]) -> list[int]:

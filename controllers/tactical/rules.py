@@ -29,10 +29,16 @@ WEAR = 4  # [1e-4] tyre wear
 LANE_COUNT = 5  # eq. (10) gen_lane_var: recent lane changes on this contiguous straight or curve
 PREV_LANE = 6  # 0-based lane at the previous checkpoint (to tell when two players' paths cross)
 PREV_TIME = 7  # [0.01 s] time state at the previous checkpoint (to check a collision along the section)
-MODELLED = 8  # 1: the player follows the opponent model (the racing line's lanes), 0: it plays freely
+MODELLED = 8  # how the player is played: MODEL_FREE (searched) or the lanes of an opponent model (MODEL_LINE, ...)
 PACE = 9  # [1e-3] the player's section times over the game's (its measured pace, controllers.tactical.pace); 0: 1
 N_FIELDS = 10
 PACE_UNITS = 1000
+
+# values of the MODELLED field (controllers.tactical.opponents chooses one per kart)
+MODEL_FREE = 0  # the player searches its own best response (the tactical game's own prediction)
+MODEL_LINE = 1  # the racing line's lane at every checkpoint (a line follower)
+MODEL_HOLD = 2  # the lane it holds now, at every checkpoint
+MODEL_SCRIPT = 3  # MODEL_SCRIPT + s: the lanes of script s of GameTables.scripted_lane (a kart's own recorded lap)
 
 COLLISION_SAMPLES = 5  # points along a section (both ends included) where two karts' positions are compared
 
@@ -280,11 +286,17 @@ def fastest_in_lane(
 
 @njit(cache=True, inline="always")
 def model_lane(tb: GameTables, state: np.ndarray, p: int) -> int:
-    """The racing line's lane at the next checkpoint of player ``p`` if it is modelled, else -1 (it plays
-    freely; so does a modelled player where the line gives no lane)."""
-    if state[p, MODELLED] == 0:
+    """The lane player ``p``'s opponent model gives it at its next checkpoint, or -1: it plays freely (not
+    modelled, or its model gives no lane there)."""
+    model = state[p, MODELLED]
+    if model == MODEL_FREE:
         return -1
-    return tb.predicted_lane[(state[p, CHECKPOINT] + 1) % tb.straight.shape[0]]
+    checkpoint = (state[p, CHECKPOINT] + 1) % tb.straight.shape[0]
+    if model == MODEL_LINE:
+        return tb.predicted_lane[checkpoint]
+    if model == MODEL_HOLD:
+        return state[p, LANE]
+    return tb.scripted_lane[model - MODEL_SCRIPT, checkpoint]
 
 
 @njit(**NO_REFCOUNT)

@@ -99,7 +99,7 @@ def test_the_games_forecast_of_an_opponent_takes_its_pace() -> None:
     forecast = {}
     for pace in (1.0, 1.06):
         me = PlayerState(0, 10, lanes[10], speed, 0.3, 0.25, 0)
-        other = PlayerState(1, 10, lanes[10], speed, 0.0, 0.25, 0, modelled=True, pace=pace)
+        other = PlayerState(1, 10, lanes[10], speed, 0.0, 0.25, 0, model=rules.MODEL_LINE, pace=pace)
         planner = TacticalPlanner(TRACK, PAPER_KART, iterations=2000, seed=1, line=line, deviation_gain=0.1)
         plan = planner.plan([me, other], 0)
         forecast[pace] = (plan.ego_waypoints[-1].time, plan.opponent_waypoints()[1][-1].time)

@@ -157,7 +157,7 @@ def test_a_kart_at_a_hairpin_entry_enters_the_game_with_a_legal_move(behind: boo
     track = TRACKS["complex"]
     planner = TacticalPlanner(track, PAPER_KART, iterations=500, seed=1, line=optimise_racing_line(track, PAPER_KART))
     ego = PlayerState(0, 16 if behind else 17, 3, 13.5, 10.0, 0.28, 0)
-    leader = PlayerState(1, 17, 3, 9.5, 10.0 if behind else 9.3, 0.28, 0, modelled=True)
+    leader = PlayerState(1, 17, 3, 9.5, 10.0 if behind else 9.3, 0.28, 0, model=rules.MODEL_LINE)
     root, _ = planner.root_state([ego, leader], 0)
     single = root[:1].copy()
     grip_now, grip_next = rules.mover_grip(planner.tables, single, 0)
@@ -214,7 +214,7 @@ def _behind_a_slow_kart_on_the_oval() -> tuple[Track, RacingLine, PlayerState, P
     line = optimise_racing_line(track, PAPER_KART)
     lane = line.checkpoint_lanes[10]
     me = PlayerState(0, 10, lane, 14.0, 0.3, 0.25, 0)
-    slow = PlayerState(1, 10, lane, 8.0, 0.0, 0.25, 0, modelled=True)
+    slow = PlayerState(1, 10, lane, 8.0, 0.0, 0.25, 0, model=rules.MODEL_LINE)
     return track, line, me, slow
 
 
