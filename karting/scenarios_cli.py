@@ -96,6 +96,61 @@ def run(
         print_json(summary)
 
 
+@app.command()
+def oracle(
+    scenarios: CSV = "overtake-straight",
+    opponents: CSV = "fixed-lqng,fixed-rl,e2e,mcts-lqng,mcts-rl",
+    tracks: Annotated[str | None, typer.Option(help="comma separated (default: each scenario's)")] = None,
+    paces: Annotated[str | None, typer.Option(help="comma separated (default: each scenario's ladder)")] = None,
+    attempts: Annotated[int, typer.Option(min=1, max=1000, help="seeded attempts per cell")] = 10,
+    seed: int = 0,
+    lookahead: Annotated[float, typer.Option(min=0.5, max=10.0, help="[s] each candidate raced forward")] = 4.0,
+    workers: Annotated[int, typer.Option(min=1, help="worker processes the cells are dealt to")] = 1,
+    out: Annotated[Path | None, typer.Option(help="also write the JSON summary here")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="print the JSON summary as the last line")] = False,
+) -> None:
+    """The oracle bound (:mod:`arena.oracle`): the same attempts as ``run``, the ego's lanes chosen each second
+    by racing every candidate forward in the simulator against the opponent's own controller. Its figures are
+    what a lane-choosing planner could reach on those attempts."""
+    from arena.oracle import ORACLE, OracleSettings, run_oracle_cells
+    from arena.scenarios import Cell, SuiteResult, load_scenario
+    from controllers.registry import validate_agent
+    from sim_core.params import MIN_PACE
+
+    try:
+        loaded = [load_scenario(name) for name in _split(scenarios)]
+        for opponent in _split(opponents):
+            validate_agent(opponent)
+        if paces and not all(MIN_PACE <= float(p) <= 1.0 for p in _split(paces)):
+            raise ValueError(f"paces must be in [{MIN_PACE}, 1]")
+        plans = [
+            (
+                s,
+                [
+                    Cell(s.name, track, ORACLE, opponent, float(pace))
+                    for track in (_split(tracks) if tracks else s.tracks)
+                    for opponent in _split(opponents)
+                    for pace in (_split(paces) if paces else s.paces)
+                ],
+            )
+            for s in loaded
+        ]
+    except (KeyError, ValueError) as exc:
+        error(str(exc).strip("'\""))
+        raise typer.Exit(2) from None
+    console.print(f"{sum(len(c) for _, c in plans) * attempts} oracle attempts", style="dim")
+    settings = OracleSettings(lookahead_s=lookahead)
+    runs = tuple((s, tuple(run_oracle_cells(s, cells, attempts, seed, settings, workers))) for s, cells in plans)
+    summary = SuiteResult(runs, attempts, seed).to_json()
+    summary["oracle"] = {"lookahead_s": settings.lookahead_s, "replan_s": settings.replan_s}
+    _show(summary)
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(summary, indent=1) + "\n")
+    if as_json:
+        print_json(summary)
+
+
 @app.command("staircase")
 def staircase_command(
     ego: Annotated[str, typer.Option(help="the agent that passes")],

@@ -265,8 +265,9 @@ class OpponentModelSelector:
     At every look (:meth:`observe`) each model forecasts each kart's lanes ``lookahead`` checkpoints beyond its
     next one (the first forecast of a checkpoint is kept: made a second or more ahead). When the kart is seen
     past a forecast checkpoint, a model scores 1 if it named another lane, else 0, into a running mean that
-    forgets by ``memory`` per sample. A kart is played by the first model (the prior) until every model has
-    ``min_samples``; then by the model of least error, changed only for one better by ``switch_margin``.
+    forgets by ``memory`` per sample. A kart is played by the first model (the prior) until a model has
+    ``min_samples``; then by the model of least error among those, changed only for one better by
+    ``switch_margin``.
     """
 
     models: tuple[OpponentModel, ...]
@@ -321,14 +322,14 @@ class OpponentModelSelector:
             self._choose(kart.index)
 
     def _choose(self, kart: int) -> None:
-        scores = [self._scores.get((kart, m.name)) for m in self.models]
-        if any(s is None or s.samples < self.min_samples for s in scores):
+        errors = self.errors(kart, self.min_samples)
+        if not errors:
             return
-        errors = [s.error / (1.0 - self.memory**s.samples) for s in scores if s is not None]  # bias-corrected
-        current = self._chosen.get(kart, 0)
-        best = min(range(len(errors)), key=errors.__getitem__)
-        if errors[best] < errors[current] - self.switch_margin:
-            self._chosen[kart] = best
+        current = self.model_of(kart).name
+        best = min(errors, key=errors.__getitem__)
+        # a model not yet measured enough (the prior included) gives way to any that is
+        if current not in errors or errors[best] < errors[current] - self.switch_margin:
+            self._chosen[kart] = self.names.index(best)
 
     def forecast(self, karts: Sequence[KartView], best_response: BestResponse) -> None:
         """Every model's forecast of each kart's lanes beyond its next checkpoint (the first one kept)."""
@@ -346,11 +347,12 @@ class OpponentModelSelector:
         """The model the game plays ``kart`` by now."""
         return self.models[self._chosen.get(kart, 0)]
 
-    def errors(self, kart: int) -> dict[str, float]:
-        """Each model's running share of missed lanes for ``kart`` (models without a sample left out)."""
+    def errors(self, kart: int, min_samples: int = 1) -> dict[str, float]:
+        """Each model's running share of missed lanes for ``kart`` (bias-corrected for the running mean's start;
+        models with fewer than ``min_samples`` left out)."""
         out = {}
         for m in self.models:
             s = self._scores.get((kart, m.name))
-            if s is not None and s.samples:
+            if s is not None and s.samples >= min_samples:
                 out[m.name] = s.error / (1.0 - self.memory**s.samples)
         return out

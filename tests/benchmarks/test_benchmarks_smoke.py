@@ -49,6 +49,10 @@ TINY: dict[str, tuple[list[str], set[str]]] = {
         {"iterations_per_s", "plan_2000_ms", "iterations_per_s_per_track", "plan_2000_ms_per_track", "iterations"},
     ),
     "mcts_strength.py": (["--games", "3", "--budgets", "20,50"], {"optimal_first_move_fraction_by_iterations"}),
+    "opponent_models.py": (
+        ["--tracks", "oval", "--laps", "1", "--time-limit", "4"],
+        {"plan_ms_p50", "plan_ms_max", "plan_ms_p50_racing_line", "reset_s_simulated", "per_field"},
+    ),
     "racing_line.py": (
         ["--repeats", "1", "--tracks", "oval"],
         {"max_seconds_per_track", "seconds_per_track", "lap_time_ratio_optimised_vs_handset"},

@@ -58,3 +58,10 @@ def test_the_staircase_command_prints_its_trials_and_r50() -> None:
     assert [t["pace"] for t in result["trials"]] == [0.8, 0.85] and result["r50"] is None  # too few reversals
     bad = runner.invoke(app, [*args, "--scenario", "defend-straight"])
     assert bad.exit_code == 2 and "needs an overtaking scenario" in bad.output
+
+
+def test_the_oracle_command_checks_its_opponents_and_paces() -> None:
+    bad_agent = runner.invoke(app, ["scenarios", "oracle", "--opponents", "schumacher"])
+    assert bad_agent.exit_code == 2 and "unknown controller 'schumacher'" in bad_agent.output
+    bad_pace = runner.invoke(app, ["scenarios", "oracle", "--paces", "0.2"])
+    assert bad_pace.exit_code == 2 and "paces must be in [0.5, 1]" in bad_pace.output
