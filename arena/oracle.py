@@ -1,17 +1,19 @@
-"""The oracle bound of a scenario cell: the best a lane-choosing planner could do on each attempt.
+"""The oracle bound of a scenario cell: what a lane-choosing planner could do with the simulator's foresight.
 
-A lane-choosing planner decides which lane its tracker drives at the coming checkpoints. The oracle makes that
-choice with what no planner has: the simulator itself and the opponent's own controller. Once a second
-(``replan_s``) it copies the race (:meth:`sim_core.world.World.state_arrays`) and both drivers, and races each
-candidate forward for ``lookahead_s``: the racing line, and each lane held for the next ``hold_checkpoints``
-checkpoints before rejoining the line. The candidate that ends furthest ahead of the opponent (along the track)
-with no collision at fault and no illegal lane change is the plan the ego's tracker (``fixed-lqng``'s LQ
-tracker) then drives. The branches race without the drivers' imprecision (the race itself keeps it), so the
-oracle's forecast is exact only up to that noise.
+A hierarchical agent's planner decides which lane its tracker drives at the coming checkpoints. The oracle
+makes that choice with what no planner has: the simulator itself and the opponent's own controller. At each of
+the base agent's plans (``mcts-lqng`` by default, once a second) it copies the race
+(:meth:`sim_core.world.World.state_arrays`), its tracker and the opponent, and races candidates forward for
+``lookahead_s``: the base agent's own plan, and that plan with each lane held for the next ``hold_checkpoints``
+checkpoints. The candidate that ends furthest ahead of the opponent along the track, with no collision at fault
+and no illegal lane change, is the plan its tracker drives (the base plan when none does better). The branches
+race without the drivers' imprecision (the race itself keeps it), so the foresight is exact only up to that
+noise.
 
-It is a receding-horizon search, not a proof of optimality: a pass that needs more than ``lookahead_s`` to pay
-off is out of its sight. It bounds what the tactical agents' lane choices can achieve against that opponent on
-those attempts; the suite's figures of the oracle sit beside theirs (``karting scenarios oracle``).
+It is a receding-horizon search over a few lane choices, not a proof of optimality: a pass that needs more than
+``lookahead_s`` to pay off, or another sequence of lanes, is out of its sight. What it shows is how much the
+base agent's lane choices leave on the table against that opponent on those attempts
+(``karting scenarios oracle``).
 """
 
 from __future__ import annotations
@@ -21,16 +23,13 @@ import multiprocessing
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 
 from arena.scenarios import Attempt, Cell, CellFigures, Scenario, attempt_specs, judge
 from arena.tournament import start_method
-from controllers.base import Controller, RaceContext
-from controllers.fixed_line import FixedLinePlanner
+from controllers.base import Controller, HighLevelPlanner, RaceContext
 from controllers.hierarchical import HierarchicalController
-from controllers.lq.presets import fixed_line_tracker
 from controllers.plan import Plan, Waypoint
 from controllers.race import decide, run_race
 from controllers.registry import make_agent
@@ -47,43 +46,60 @@ AT_FAULT_COST = (
 
 @dataclass(frozen=True)
 class OracleSettings:
-    """How far and how often the oracle looks."""
+    """How far the oracle looks and which agent it improves on."""
 
     lookahead_s: float = 4.0  # [s] how long each candidate is raced forward
-    replan_s: float = 1.0  # [s] between searches (the tactical planners' rate)
-    hold_checkpoints: int = 4  # checkpoints a candidate holds its lane before rejoining the line
+    hold_checkpoints: int = 4  # checkpoints a candidate holds its lane before rejoining the base plan
+    base: str = "mcts-lqng"  # the hierarchical agent whose plan is the first candidate and whose tracker drives
+
+
+class _FixedPlan:
+    """A high level that always returns one plan (a branch's ego)."""
+
+    rate_hz = 1.0
+
+    def __init__(self, plan: Plan) -> None:
+        self._plan = plan
+
+    def reset(self, context: RaceContext) -> None:
+        """Nothing to prepare."""
+
+    def plan(self, observation: Observation) -> Plan:
+        """The plan."""
+        return self._plan
 
 
 class OraclePlanner:
-    """The ego's high level: the plan the oracle chose last, else the racing line (:class:`FixedLinePlanner`)."""
+    """The oracle's high level: the base agent's plan, or a variant of it holding one lane for the next
+    ``hold_checkpoints`` checkpoints, whichever ends furthest ahead when raced forward in a copy of the race
+    (:meth:`attach` gives it the race each step)."""
 
-    def __init__(self, rate_hz: float = 10.0) -> None:
-        self.rate_hz = rate_hz  # re-read often: a new choice reaches the tracker within a tenth of a second
-        self.line = FixedLinePlanner()
-        self.chosen: Plan | None = None
+    def __init__(self, base: HighLevelPlanner, settings: OracleSettings) -> None:
+        self.base = base
+        self.settings = settings
+        self.rate_hz = base.rate_hz
+        self.searches = 0
+        self.off_base = 0  # searches that chose a variant over the base plan
         self._context: RaceContext | None = None
+        self._race: tuple[World, Sequence[Controller]] | None = None
 
     def reset(self, context: RaceContext) -> None:
-        """Optimise the racing line; forget any choice."""
-        self.line.reset(context)
+        """Reset the base planner."""
+        self.base.reset(context)
         self._context = context
-        self.chosen = None
+        self._race = None
 
-    def plan(self, observation: Observation) -> Plan:
-        """The oracle's choice while it still has a waypoint ahead of the kart, else the line's plan."""
-        passed = observation.me.checkpoints_passed
-        if self.chosen is not None and any(w.checkpoint > passed for w in self.chosen.ego_waypoints):
-            ahead = tuple(w for w in self.chosen.ego_waypoints if w.checkpoint > passed)
-            return replace(self.chosen, waypoints={observation.ego: ahead})
-        return self.line.plan(observation)
+    def attach(self, world: World, drivers: Sequence[Controller]) -> None:
+        """The race as it stands (one race, the ego kart 0)."""
+        self._race = (world, drivers)
 
-    def candidates(self, observation: Observation, hold: int) -> list[Plan]:
-        """The line's plan, then for each lane the plan that holds it for ``hold`` checkpoints."""
+    def candidates(self, observation: Observation, base: Plan) -> list[Plan]:
+        """``base``, then for each lane the plan that holds it for the first ``hold_checkpoints`` waypoints."""
         assert self._context is not None, "reset() first"
         track = self._context.track
-        line = self.line.plan(observation)
-        plans = [line]
-        waypoints = line.ego_waypoints
+        hold = self.settings.hold_checkpoints
+        waypoints = base.ego_waypoints
+        plans = [base]
         for lane in range(1, track.n_lanes + 1):
             held = []
             for i, w in enumerate(waypoints):
@@ -92,57 +108,38 @@ class OraclePlanner:
                     w = Waypoint(w.checkpoint, lane, (float(point[0]), float(point[1])), w.speed, w.time)
                 held.append(w)
             if any(a.lane != b.lane for a, b in zip(held, waypoints, strict=True)):
-                plans.append(replace(line, waypoints={observation.ego: tuple(held)}))
+                plans.append(replace(base, waypoints={**base.waypoints, observation.ego: tuple(held)}))
         return plans
 
-
-def oracle_driver() -> HierarchicalController:
-    """The ego the oracle steers: its planner holds the oracle's choice, ``fixed-lqng``'s tracker drives it."""
-    return HierarchicalController(ORACLE, OraclePlanner(), fixed_line_tracker(4), plan_latency=0.0)
-
-
-class LaneOracle:
-    """The search, run as a one-race step hook (it sees the world and the drivers); it also notes the step of the
-    ego's first pass (:func:`arena.scenarios.judge`)."""
-
-    def __init__(self, settings: OracleSettings) -> None:
-        self.settings = settings
-        self.searches = 0
-        self.off_line = 0  # searches that chose a lane off the racing line
-        self.first_pass_step: int | None = None
-
-    def __call__(self, world: World, drivers: Sequence[Controller], step: int) -> None:
-        """Search when due and hand the ego's planner the best candidate."""
-        race = 0
-        if self.first_pass_step is None and world.istate[race, 0, st.I_PASSES] > 0:
-            self.first_pass_step = step
-        every = max(1, round(self.settings.replan_s / DT))
-        if step % every or world.istate[race, 0, st.I_FINISHED]:
-            return
-        ego = drivers[0]
-        assert isinstance(ego, HierarchicalController) and isinstance(ego.planner, OraclePlanner)
-        observation = observe(world, race)[0]
-        candidates = ego.planner.candidates(observation, self.settings.hold_checkpoints)
+    def plan(self, observation: Observation) -> Plan:
+        """The best candidate raced forward (the base plan alone before the race is attached)."""
+        base = self.base.plan(observation)
+        if self._race is None:
+            return base
+        world, drivers = self._race
+        candidates = self.candidates(observation, base)
         saved = world.state_arrays()
-        scores = [self._race_forward(world, race, saved, drivers, plan) for plan in candidates]
-        best = int(np.argmax(scores))  # the first of equals: the line's
-        ego.planner.chosen = candidates[best]
+        scores = [self._race_forward(world, saved, drivers, plan) for plan in candidates]
+        best = int(np.argmax(scores))  # the first of equals: the base plan
         self.searches += 1
-        self.off_line += best > 0
+        self.off_base += best > 0
+        return candidates[best]
 
     def _race_forward(
-        self, world: World, race: int, saved: dict[str, np.ndarray], drivers: Sequence[Controller], plan: Plan
+        self, world: World, saved: dict[str, np.ndarray], drivers: Sequence[Controller], plan: Plan
     ) -> float:
         """[m] how far ahead of the opponent the ego ends driving ``plan`` for the lookahead (less
         :data:`AT_FAULT_COST` for a collision at fault or an illegal lane change on the way)."""
         branch = World(world.track, 1, world.n_karts, world.params, laps=world.laps, sensors=world.sensors)
-        branch.kart_rows[0] = world.kart_rows[race]
-        branch.paces[0] = world.paces[race]
-        branch.restore_state({name: array[race : race + 1] for name, array in saved.items()})
-        karts: list[Any] = [copy.deepcopy(d) for d in drivers]
-        ego = karts[0]
-        ego.deliver(plan)
-        ego.planner.chosen = plan
+        branch.kart_rows[0] = world.kart_rows[0]
+        branch.paces[0] = world.paces[0]
+        branch.restore_state(saved)
+        ego = drivers[0]
+        assert isinstance(ego, HierarchicalController)
+        mine = HierarchicalController("branch", _FixedPlan(plan), copy.deepcopy(ego.tracker), plan_latency=0.0)
+        mine.rate_hz = ego.rate_hz
+        mine.deliver(plan)
+        karts: list[Controller] = [mine, *(copy.deepcopy(d) for d in drivers[1:])]
         before = branch.istate[0, 0, [st.I_FAULTS, st.I_ILLEGAL]].copy()
         holds = [max(1, round(1.0 / (DT * d.rate_hz))) for d in karts]
         actions = np.zeros((1, world.n_karts, 2))
@@ -159,14 +156,38 @@ class LaneOracle:
         return float(progress[0] - progress[1]) - AT_FAULT_COST * float(faults.sum())
 
 
+class LaneOracle:
+    """A one-race step hook: hands the oracle's planner the race each step and notes the step of the ego's first
+    pass (:func:`arena.scenarios.judge`)."""
+
+    def __init__(self, planner: OraclePlanner) -> None:
+        self.planner = planner
+        self.first_pass_step: int | None = None
+
+    def __call__(self, world: World, drivers: Sequence[Controller], step: int) -> None:
+        """Attach the race; note a first pass."""
+        self.planner.attach(world, drivers)
+        if self.first_pass_step is None and world.istate[0, 0, st.I_PASSES] > 0:
+            self.first_pass_step = step
+
+
+def oracle_driver(settings: OracleSettings) -> tuple[HierarchicalController, LaneOracle]:
+    """The ego the oracle steers (the base agent with its planner wrapped) and the hook that shows it the race."""
+    driver = make_agent(settings.base)
+    assert isinstance(driver, HierarchicalController), f"{settings.base} is not a hierarchical agent"
+    planner = OraclePlanner(driver.planner, settings)
+    driver.planner = planner
+    driver.name = ORACLE
+    return driver, LaneOracle(planner)
+
+
 def run_oracle_cell(scenario: Scenario, cell: Cell, attempts: int, seed: int, settings: OracleSettings) -> CellFigures:
     """The oracle's figures on ``cell``'s attempts (the races of :func:`arena.scenarios.run_cells`)."""
     results: list[Attempt] = []
-    for spec in attempt_specs(scenario, replace(cell, ego="fixed-lqng"), attempts, seed):
-        oracle = LaneOracle(settings)
-        drivers = [oracle_driver(), make_agent(spec.controllers[1])]
-        outcome = run_race(spec, on_step=oracle, drivers=drivers)
-        results.append(judge(scenario.kind, outcome, oracle.first_pass_step))
+    for spec in attempt_specs(scenario, replace(cell, ego=settings.base), attempts, seed):
+        ego, hook = oracle_driver(settings)
+        outcome = run_race(spec, on_step=hook, drivers=[ego, make_agent(spec.controllers[1])])
+        results.append(judge(scenario.kind, outcome, hook.first_pass_step))
     return CellFigures.of(replace(cell, ego=ORACLE), results)
 
 

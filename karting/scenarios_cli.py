@@ -109,9 +109,9 @@ def oracle(
     out: Annotated[Path | None, typer.Option(help="also write the JSON summary here")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print the JSON summary as the last line")] = False,
 ) -> None:
-    """The oracle bound (:mod:`arena.oracle`): the same attempts as ``run``, the ego's lanes chosen each second
-    by racing every candidate forward in the simulator against the opponent's own controller. Its figures are
-    what a lane-choosing planner could reach on those attempts."""
+    """The oracle bound (:mod:`arena.oracle`): the same attempts as ``run``, ``mcts-lqng`` as the ego with each of
+    its plans replaced by whichever of it and its held-lane variants ends furthest ahead when raced forward in the
+    simulator against the opponent's own controller."""
     from arena.oracle import ORACLE, OracleSettings, run_oracle_cells
     from arena.scenarios import Cell, SuiteResult, load_scenario
     from controllers.registry import validate_agent
@@ -142,7 +142,7 @@ def oracle(
     settings = OracleSettings(lookahead_s=lookahead)
     runs = tuple((s, tuple(run_oracle_cells(s, cells, attempts, seed, settings, workers))) for s, cells in plans)
     summary = SuiteResult(runs, attempts, seed).to_json()
-    summary["oracle"] = {"lookahead_s": settings.lookahead_s, "replan_s": settings.replan_s}
+    summary["oracle"] = {"lookahead_s": settings.lookahead_s, "base": settings.base}
     _show(summary)
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)
