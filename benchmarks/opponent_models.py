@@ -26,6 +26,7 @@ import numpy as np
 from controllers.race import RaceSpec, run_race
 from controllers.registry import make_agent
 from controllers.tactical.opponents import solo_lap_lanes
+from sim_core.track_io import get_track
 
 FIELDS = {"1v1": ("fixed-rl",), "4 karts": ("fixed-lqng", "e2e", "mcts-rl")}
 
@@ -60,7 +61,7 @@ def main() -> None:
     t0 = time.perf_counter()
     for track in tracks:
         for agent in ("fixed-lqng", "fixed-rl"):
-            solo_lap_lanes(track, agent)
+            solo_lap_lanes(get_track(track), agent, make_agent)
     reset_s = (time.perf_counter() - t0) / len(tracks)
     figures: dict[str, dict[str, float]] = {}
     for field_name, opponents in FIELDS.items():

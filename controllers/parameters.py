@@ -68,6 +68,17 @@ class ParameterError(ValueError):
         return (type(self), (self.controller, self.parameter, self.reason))
 
 
+class InvalidValueError(ValueError):
+    """Raised by a parameter dataclass's ``__post_init__`` for a value its type and bounds allow but its meaning
+    does not (an unknown name in a ``str`` parameter); :func:`with_overrides` reports it as a
+    :class:`ParameterError`."""
+
+    def __init__(self, parameter: str, reason: str) -> None:
+        super().__init__(f"{parameter} {reason}")
+        self.parameter = parameter
+        self.reason = reason
+
+
 def parameter(
     default: Value, description: str = "", *, unit: str = "", minimum: float | None = None, maximum: float | None = None
 ) -> Any:
@@ -127,4 +138,7 @@ def with_overrides(controller: str, params_type: type[P], overrides: Mapping[str
             known = ", ".join(specs) or "none"
             raise ParameterError(controller, name, f"is unknown (known: {known})")
         values[name] = _checked(controller, spec, value)
-    return params_type(**values)
+    try:
+        return params_type(**values)
+    except InvalidValueError as exc:
+        raise ParameterError(controller, exc.parameter, exc.reason) from None

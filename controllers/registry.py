@@ -154,8 +154,12 @@ def _mcts_lqng(params: MCTSLQNGParams) -> Controller:
 
 
 def _mcts_lqng_adaptive(params: MCTSLQNGAdaptiveParams) -> Controller:
-    search = MCTSPlanner.from_settings(params, hold_gain=params.hold_gain_s)
+    search = MCTSPlanner.from_settings(params, hold_gain=params.hold_gain_s, agent_factory=make_agent)
     return HierarchicalController("mcts-lqng-adaptive", search, mcts_tracker(params.lqng_horizon_steps))
+
+
+def _mcts_rl_adaptive(params: MCTSRLAdaptiveParams) -> Controller:
+    return build_mcts_rl_adaptive(params, make_agent)
 
 
 def _fixed_lqng(params: FixedLQNGParams) -> Controller:
@@ -200,7 +204,7 @@ _SPECS: tuple[ControllerSpec[Any], ...] = (
         "mcts-rl-adaptive",
         "mcts-rl playing each other kart in its game by the opponent model that has forecast that kart's lanes "
         "best so far (as mcts-lqng-adaptive).",
-        build_mcts_rl_adaptive,
+        _mcts_rl_adaptive,
         MCTSRLAdaptiveParams,
     ),
     _spec(

@@ -31,6 +31,7 @@ from controllers.parameters import parameter
 from controllers.rl.filters import KeepDistance, LineSpeedCeiling, RecoverFromStall
 from controllers.rl.tracker import RLTracker
 from controllers.tactical.high_level import AdaptiveOpponentParams, MCTSPlanner, TacticalParams
+from controllers.tactical.opponents import AgentFactory
 from sim_core.observation import Observation
 
 RL_RATE_HZ = 50.0  # called every step; the tracker itself decides at 25 Hz and holds its action
@@ -91,10 +92,11 @@ def _rl_filters(line_margin: float, ceiling_margin: float, lookahead: float) -> 
     return (LineSpeedCeiling(ceiling_margin, line_margin), KeepDistance(lookahead), RecoverFromStall())
 
 
-def build_mcts_rl(params: MCTSRLParams, name: str = "mcts-rl") -> Controller:
-    """MCTS planner + RL tracker."""
+def build_mcts_rl(params: MCTSRLParams, name: str = "mcts-rl", agent_factory: AgentFactory | None = None) -> Controller:
+    """MCTS planner + RL tracker (``agent_factory``: what builds the agents of simulated opponent models)."""
     planner = MCTSPlanner.from_settings(
         params,
+        agent_factory=agent_factory,
         lane_change_slack=params.lane_change_slack,
         # the tracker keeps its distance to a kart ahead (KeepDistance); the game's coarse speed bins behind it
         # held mcts-rl 5-17 m back, too far to ever pass
@@ -104,9 +106,9 @@ def build_mcts_rl(params: MCTSRLParams, name: str = "mcts-rl") -> Controller:
     return HierarchicalController(name, planner, RLTracker("mcts-rl", filters=filters), rate_hz=RL_RATE_HZ)
 
 
-def build_mcts_rl_adaptive(params: MCTSRLAdaptiveParams) -> Controller:
+def build_mcts_rl_adaptive(params: MCTSRLAdaptiveParams, agent_factory: AgentFactory) -> Controller:
     """``mcts-rl`` with opponent models chosen by measured error."""
-    return build_mcts_rl(params, "mcts-rl-adaptive")
+    return build_mcts_rl(params, "mcts-rl-adaptive", agent_factory)
 
 
 def build_fixed_rl(params: FixedRLParams) -> Controller:

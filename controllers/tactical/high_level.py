@@ -16,11 +16,11 @@ import math
 from dataclasses import dataclass, replace
 
 from controllers.base import RaceContext
-from controllers.parameters import parameter
+from controllers.parameters import InvalidValueError, parameter
 from controllers.plan import Plan, Waypoint
 from controllers.racing_line import RacingLine, optimise_racing_line
 from controllers.tactical.game import GameParams
-from controllers.tactical.opponents import ADAPTIVE_MODELS, OpponentModelSelector, model_names
+from controllers.tactical.opponents import ADAPTIVE_MODELS, AgentFactory, OpponentModelSelector, model_names
 from controllers.tactical.opponents import RacingLine as RacingLineModel
 from controllers.tactical.pace import PaceMeter
 from controllers.tactical.planner import PlayerState, TacticalPlanner
@@ -76,6 +76,12 @@ class AdaptiveOpponentParams(TacticalParams):
         "first until measured)",
     )
 
+    def __post_init__(self) -> None:
+        try:
+            model_names(self.opponent_models)
+        except ValueError as exc:
+            raise InvalidValueError("opponent_models", str(exc)) from None
+
 
 def lanes_legal(track: Track, lane: int, count: int, waypoints: list[Waypoint], limit: int) -> bool:
     """Whether driving through ``waypoints`` from ``lane`` (lane-change counter ``count``) breaks no rule
@@ -114,6 +120,7 @@ class MCTSPlanner:
         pace_model: bool = False,
         own_pace: float = 1.0,
         opponent_models: tuple[str, ...] = (RacingLineModel.name,),
+        agent_factory: AgentFactory | None = None,
     ) -> None:
         if lane_change_slack < 0:
             raise ValueError("lane_change_slack must be >= 0")
@@ -144,7 +151,7 @@ class MCTSPlanner:
         self.own_pace = own_pace
         # how the game plays each other kart: the model of these with the fewest missed lanes for that kart so far
         # (controllers.tactical.opponents; the first until measured)
-        self.opponents = OpponentModelSelector.of(opponent_models)
+        self.opponents = OpponentModelSelector.of(opponent_models, agent_factory)
         self._pace: PaceMeter | None = None
         self._planner: TacticalPlanner | None = None
         self._context: RaceContext | None = None
@@ -160,6 +167,7 @@ class MCTSPlanner:
         lane_change_slack: int = 0,
         planned_speeds_behind: bool = True,
         hold_gain: float | None = None,
+        agent_factory: AgentFactory | None = None,
     ) -> MCTSPlanner:
         """The planner of a registered agent's ``settings``: the racing line unless the search gains, every kart
         timed by its measured pace and played by the opponent models of ``settings`` (the racing line's
@@ -178,6 +186,7 @@ class MCTSPlanner:
             pace_model=True,
             own_pace=settings.own_pace,
             opponent_models=opponent_models,
+            agent_factory=agent_factory,
         )
 
     @property

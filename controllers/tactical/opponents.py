@@ -17,12 +17,17 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from functools import cache
 from typing import Protocol
 
+import numpy as np
+
+from controllers.base import Controller, RaceContext
 from controllers.tactical import rules
-from sim_core.observation import KartView
+from sim_core.observation import KartView, observe
+from sim_core.params import DT
+from sim_core.state import I_CP_PASSED, I_LANE
 from sim_core.track import Track
+from sim_core.world import World
 
 # a kart's best response in the game: its 1-based lane at each (absolute) checkpoint the game plays it to
 BestResponse = Callable[[int], dict[int, int]]
@@ -173,18 +178,22 @@ class OwnLastLap:
         return GameModel(rules.MODEL_SCRIPT, tuple(lanes))
 
 
+AgentFactory = Callable[[str], Controller]  # a new controller from an agent string (the registry's make_agent)
+
+
 class SimulatedDriver:
     """A registered controller simulated forward: its lane at every checkpoint of a lap driven alone on the
     race's track (simulated once per track and controller; a pace handicap drives the same path)."""
 
-    def __init__(self, agent: str) -> None:
+    def __init__(self, agent: str, build: AgentFactory) -> None:
         self.agent = agent
         self.name = f"{SIMULATED_PREFIX}{agent}"
+        self._build = build
         self._lanes: tuple[int, ...] = ()
 
     def reset(self, track: Track, line_lanes: tuple[int, ...]) -> None:
         """Simulate the controller's lap (or take it from the cache)."""
-        self._lanes = solo_lap_lanes(track.name, self.agent)
+        self._lanes = solo_lap_lanes(track, self.agent, self._build)
 
     def record(self, kart: KartView) -> None:
         """Nothing to learn."""
@@ -198,23 +207,33 @@ class SimulatedDriver:
         return GameModel(rules.MODEL_SCRIPT, tuple(lane - 1 for lane in self._lanes))
 
 
-@cache
-def solo_lap_lanes(track: str, agent: str) -> tuple[int, ...]:
-    """The 1-based lane ``agent`` crosses each checkpoint of ``track`` in, on its second lap alone (the first
-    starts from the grid), from a race without imprecision."""
-    from controllers.race import RaceSpec, load_any_track, run_race  # builds controllers: not at import time
-    from sim_core.state import I_CP_PASSED, I_LANE
+_SOLO_LAPS: dict[tuple[str, int, str], tuple[int, ...]] = {}
+SOLO_LAP_TIME_LIMIT = 600.0  # [s] of race time: a controller that cannot drive two laps alone gives what it drove
 
-    crossings: dict[int, int] = {}
 
-    def note(world: object, drivers: object, step: int) -> None:
-        istate = world.istate  # type: ignore[attr-defined]
-        crossings[int(istate[0, 0, I_CP_PASSED])] = int(istate[0, 0, I_LANE])
-
-    spec = RaceSpec(track=track, controllers=(agent,), laps=2, seed=0, conditions="paper")
-    run_race(spec, on_step=note)
-    n = load_any_track(track).n_checkpoints
-    return tuple(crossings.get(n + c, crossings.get(c, 1)) for c in range(n))
+def solo_lap_lanes(track: Track, agent: str, build: AgentFactory) -> tuple[int, ...]:
+    """The 1-based lane ``agent`` (built by ``build``) crosses each checkpoint of ``track`` in on its second lap
+    alone (the first starts from the grid; a checkpoint it never crossed: lane 1), without imprecision. Kept per
+    track and agent for the life of the process."""
+    key = (track.name, track.n_checkpoints, agent)
+    if key not in _SOLO_LAPS:
+        world = World(track, 1, 1, laps=2, sensors=True)
+        driver = build(agent)
+        driver.reset(RaceContext(track, world.kart_params(0, 0), 0, 1, world.lane_change_limit, 0))
+        hold = max(1, round(1.0 / (DT * driver.rate_hz)))
+        actions = np.zeros((1, 1, 2))
+        crossings: dict[int, int] = {}
+        for step in range(round(SOLO_LAP_TIME_LIMIT / DT)):
+            if world.done[0]:
+                break
+            if step % hold == 0:
+                action = driver.act(observe(world, 0)[0])
+                actions[0, 0] = (action.steer, action.throttle)
+            world.step(actions)
+            crossings[int(world.istate[0, 0, I_CP_PASSED])] = int(world.istate[0, 0, I_LANE])
+        n = track.n_checkpoints
+        _SOLO_LAPS[key] = tuple(crossings.get(n + c, crossings.get(c, 1)) for c in range(n))
+    return _SOLO_LAPS[key]
 
 
 MODELS: dict[str, Callable[[], OpponentModel]] = {
@@ -226,10 +245,13 @@ MODELS: dict[str, Callable[[], OpponentModel]] = {
 SIMULATED_PREFIX = "simulated-"  # simulated-fixed-lqng: the registered fixed-lqng simulated forward
 
 
-def make_model(name: str) -> OpponentModel:
-    """The model called ``name``: one of :data:`MODELS` or ``simulated-AGENT`` (a registered agent string)."""
+def make_model(name: str, build: AgentFactory | None = None) -> OpponentModel:
+    """The model called ``name``: one of :data:`MODELS` or ``simulated-AGENT`` (an agent string, which ``build``
+    makes)."""
     if name.startswith(SIMULATED_PREFIX):
-        return SimulatedDriver(name[len(SIMULATED_PREFIX) :])
+        if build is None:
+            raise ValueError(f"opponent model {name!r} needs an agent factory")
+        return SimulatedDriver(name[len(SIMULATED_PREFIX) :], build)
     if name not in MODELS:
         raise ValueError(f"unknown opponent model {name!r}; known: {', '.join(MODELS)} or {SIMULATED_PREFIX}AGENT")
     return MODELS[name]()
@@ -285,9 +307,10 @@ class OpponentModelSelector:
             raise ValueError("at least one opponent model")
 
     @classmethod
-    def of(cls, names: Sequence[str]) -> OpponentModelSelector:
-        """A selector over the models called ``names`` (the first is the prior)."""
-        return cls(tuple(make_model(name) for name in names))
+    def of(cls, names: Sequence[str], build: AgentFactory | None = None) -> OpponentModelSelector:
+        """A selector over the models called ``names`` (the first is the prior; ``build`` makes the agents of
+        ``simulated-AGENT`` models)."""
+        return cls(tuple(make_model(name, build) for name in names))
 
     @property
     def names(self) -> tuple[str, ...]:

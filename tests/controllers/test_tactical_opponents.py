@@ -7,6 +7,7 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
+from controllers.parameters import ParameterError
 from controllers.race import RaceSpec, run_race
 from controllers.racing_line import optimise_racing_line
 from controllers.registry import make_agent
@@ -85,6 +86,8 @@ def test_errors_are_the_share_of_missed_lanes() -> None:
 def test_unknown_models_are_refused_by_name() -> None:
     with pytest.raises(ValueError, match="unknown opponent model 'psychic'"):
         model_names("racing-line+psychic")
+    with pytest.raises(ParameterError, match="opponent_models"):  # an agent string: a 422 over REST
+        make_agent("mcts-lqng-adaptive:opponent_models=racing-line+psychic")
     with pytest.raises(ValueError):
         model_names("+")
     assert model_names("racing-line+simulated-fixed-lqng") == ("racing-line", "simulated-fixed-lqng")
@@ -139,7 +142,7 @@ def test_a_best_response_forecast_is_the_free_players_own_play() -> None:
 
 
 def test_a_simulated_agent_drives_its_own_lanes() -> None:
-    lanes = solo_lap_lanes("oval", "fixed-lqng")
+    lanes = solo_lap_lanes(TRACK, "fixed-lqng", make_agent)
     assert len(lanes) == N
     # the fixed-line agent follows the racing line it was given: its lanes are the line's nearly everywhere
     assert sum(a == b for a, b in zip(lanes, LINE_LANES, strict=True)) >= 0.8 * N
