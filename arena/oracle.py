@@ -39,9 +39,8 @@ from sim_core.params import DT
 from sim_core.world import World
 
 ORACLE = "oracle"  # the ego's name in the oracle's figures
-AT_FAULT_COST = (
-    1.0e3  # [m] a branch with a collision at fault or an illegal lane change is never chosen over one without
-)
+# [m] a branch with a collision at fault or an illegal lane change is never chosen over one without
+AT_FAULT_COST = 1.0e3
 
 
 @dataclass(frozen=True)
@@ -82,6 +81,7 @@ class OraclePlanner:
         self.off_base = 0  # searches that chose a variant over the base plan
         self._context: RaceContext | None = None
         self._race: tuple[World, Sequence[Controller]] | None = None
+        self._branch: World | None = None  # one world for every branch, its state restored from the race each time
 
     def reset(self, context: RaceContext) -> None:
         """Reset the base planner."""
@@ -130,7 +130,9 @@ class OraclePlanner:
     ) -> float:
         """[m] how far ahead of the opponent the ego ends driving ``plan`` for the lookahead (less
         :data:`AT_FAULT_COST` for a collision at fault or an illegal lane change on the way)."""
-        branch = World(world.track, 1, world.n_karts, world.params, laps=world.laps, sensors=world.sensors)
+        if self._branch is None or self._branch.track is not world.track:
+            self._branch = World(world.track, 1, world.n_karts, world.params, laps=world.laps, sensors=world.sensors)
+        branch = self._branch
         branch.kart_rows[0] = world.kart_rows[0]
         branch.paces[0] = world.paces[0]
         branch.restore_state(saved)
