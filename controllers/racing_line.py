@@ -22,6 +22,7 @@ from sim_core.params import KartParams
 from sim_core.track import Track
 
 LINE_SPACING = 1.0  # [m] sample spacing of the optimised line
+ValueSlopes = tuple[list[float], list[float]]  # values at the samples, and each segment's slope
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,19 @@ class RacingLine:
             np.append(self.offset, self.offset[0]),
             np.append(self.speed, self.speed[0]),
         )
+
+    @property
+    def closed_length(self) -> float:
+        """[m] the lap of the line's samples (one sample spacing past the last): its lookups wrap at this."""
+        return self._closed[0]
+
+    @property
+    def interpolation_tables(
+        self,
+    ) -> tuple[list[float], tuple[list[float], list[float]], tuple[list[float], list[float]]]:
+        """The one-point lookups' tables: the closed samples' progress, and (values, slopes) of the offset and of
+        the speed profile (what :func:`_interp_at` reads; compiled code reads the same numbers)."""
+        return self._sample_s, self._offset_table, self._speed_table
 
     @property
     def closed_s(self) -> np.ndarray:

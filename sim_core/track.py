@@ -209,13 +209,15 @@ class Track:
     def point_at(self, s: float) -> tuple[np.ndarray, np.ndarray]:
         """(position, unit tangent) on the centre line at arc length ``s`` [m] (wraps)."""
         s = s % self.length
-        starts, ends, deltas, tangents = self._segments
+        starts, ends, deltas, tangents = self.segments
         i = bisect.bisect_right(starts, s) - 1
         u = (s - starts[i]) / max(ends[i] - starts[i], 1e-12)
         return self.centre_xy[i] + u * deltas[i], tangents[i]
 
     @cached_property
-    def _segments(self) -> tuple[list[float], list[float], np.ndarray, np.ndarray]:
+    def segments(self) -> tuple[list[float], list[float], np.ndarray, np.ndarray]:
+        """The centre line's segments as :meth:`point_at` reads them: starts and ends [m], vectors and unit
+        tangents (read-only)."""
         # point_at runs at every step of every LQ tracker: each segment's start and end [m], its vector and its
         # unit tangent, computed once (as point_at computed them per call: the same numbers to the last bit)
         m = len(self.centre_s)

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controllers.base import Action, RaceContext
-from controllers.lq.game import STATE_SIZE, solve_tracker_game
+from controllers.lq.targets import AIM_OFFSET, HEADING_ERROR, SPEED_TARGET, TrackerTables, player_targets, solve_targets
 from controllers.lq.traffic import ExactLanes, LateralBound, SpeedLimit, SteerFilter, TrafficRule, TrafficScene
 from controllers.plan import Plan, Waypoint
 from controllers.racing_line import RacingLine, optimise_racing_line
@@ -38,9 +38,14 @@ from sim_core.params import DT
 from sim_core.track import Track
 
 
-def _lane_correction(lane_offset: float, line_offset: float, tolerance: float) -> float:
-    gap = lane_offset - line_offset
-    return 0.0 if abs(gap) <= tolerance else gap - math.copysign(tolerance, gap)
+def _player_row(kart: KartView) -> tuple[float, ...]:
+    """A player's row of :func:`controllers.lq.targets.player_targets` (``PX`` ... ``PLATERAL``)."""
+    return (kart.x, kart.y, kart.heading, kart.speed, kart.progress, kart.lateral)
+
+
+def _waypoint_rows(first: Waypoint, second: Waypoint) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A player's two waypoint rows (``WCHECKPOINT`` ... ``WSPEED``)."""
+    return tuple((w.checkpoint, w.lane, w.position[0], w.position[1], w.speed) for w in (first, second))  # type: ignore[return-value]
 
 
 def within(first: tuple[float, float] | None, second: tuple[float, float] | None) -> tuple[float, float] | None:
@@ -105,8 +110,7 @@ class LQNGTracker:
         self._line: RacingLine | None = None
         self._kart_vector = np.zeros(0)
         self._steer = 0.0
-        self._checkpoint_s: list[float] = []
-        self._lane_offsets: list[list[float]] = []
+        self._tables: TrackerTables | None = None
 
     def reset(self, context: RaceContext) -> None:
         """Remember the track and kart limits and get the track's racing line (the shape followed between
@@ -115,10 +119,7 @@ class LQNGTracker:
         self._kart_vector = context.kart.as_array()
         self._steer = 0.0
         self._line = optimise_racing_line(context.track, context.kart)
-        # the track's checkpoint positions and lane offsets as floats: looked up for every player at every step,
-        # where a numpy scalar's indexing and arithmetic cost more than the arithmetic (the same numbers)
-        self._checkpoint_s = context.track.checkpoint_s.tolist()
-        self._lane_offsets = [context.track.lane_offsets(c).tolist() for c in range(context.track.n_checkpoints)]
+        self._tables = TrackerTables.of(context.track, self._line)
 
     # ------------------------------------------------------------------ targets
     def _upcoming(self, track: Track, kart: KartView, plan: Plan | None, owner: int) -> tuple[Waypoint, Waypoint]:
@@ -133,54 +134,54 @@ class LQNGTracker:
             ahead.append(Waypoint(checkpoint, lane, (float(point[0]), float(point[1])), 15.0, 0.0))
         return ahead[0], ahead[1]
 
-    def _aim(
+    def _targets(
+        self, state: np.ndarray, waypoints: np.ndarray, tolerance: float, bounds: tuple[float, float] | None
+    ) -> np.ndarray:
+        """Per player (rows of ``state``, the ego first; ``waypoints`` its next two): its aim point's lateral
+        offset, its heading error to the aim and its speed target (:func:`controllers.lq.targets.player_targets`:
+        a pure-pursuit aim on the path blending the kart's lateral offset into the waypoints' lanes, the ego's held
+        within ``bounds`` (lowest, highest offset) if given)."""
+        assert self._context is not None and self._tables is not None, "reset() first"
+        p, kart, tables = self.params, self._context.kart, self._tables
+        return player_targets(
+            state,
+            waypoints,
+            tolerance,
+            np.array(bounds or (-math.inf, math.inf)),
+            p.min_lookahead,
+            p.lookahead_time,
+            kart.top_speed,
+            kart.braking,
+            p.braking_use,
+            p.speed_margin,
+            tables.length,
+            tables.checkpoint_s,
+            tables.lane_offsets,
+            tables.segment_starts,
+            tables.segment_ends,
+            tables.segment_deltas,
+            tables.segment_tangents,
+            tables.centre_xy,
+            tables.line_length,
+            tables.line_s,
+            tables.line_offset,
+            tables.line_offset_slope,
+            tables.line_speed,
+            tables.line_speed_slope,
+        )
+
+    def aim_offset(
         self,
-        track: Track,
         kart: KartView,
         first: Waypoint,
         second: Waypoint,
         tolerance: float,
         bounds: tuple[float, float] | None = None,
-    ) -> tuple[float, float, float]:
-        """Pure-pursuit aim point (x, y) on the path blending the kart's lateral offset into the waypoints' lanes,
-        and its lateral offset from the centre line [m], held within ``bounds`` (lowest, highest offset) if given."""
-        p = self.params
-        lookahead = max(p.min_lookahead, abs(kart.speed) * p.lookahead_time)
-        n = len(self._checkpoint_s)
-        at1, at2 = first.checkpoint % n, second.checkpoint % n
-        s1 = (self._checkpoint_s[at1] - kart.progress) % track.length
-        s2 = s1 + (self._checkpoint_s[at2] - self._checkpoint_s[at1]) % track.length
-        d1 = self._lane_offsets[at1][first.lane - 1]
-        d2 = self._lane_offsets[at2][second.lane - 1]
-        # follow the racing line's shape, shifted where a waypoint's lane is away from it: the correction is
-        # the lane's offset from the line (0 when the line already passes within half a lane of it)
-        assert self._line is not None
-        line = self._line
-        aim_s = kart.progress + lookahead
-        c1 = _lane_correction(d1, float(line.offset_at(kart.progress + s1)), tolerance)
-        c2 = _lane_correction(d2, float(line.offset_at(kart.progress + s2)), tolerance)
-        c_now = kart.lateral - float(line.offset_at(kart.progress))
-        if lookahead <= s1:
-            correction = c_now + (c1 - c_now) * lookahead / max(s1, 1e-6)
-        else:
-            correction = c1 + (c2 - c1) * min((lookahead - s1) / max(s2 - s1, 1e-6), 1.0)
-        d = float(line.offset_at(aim_s)) + correction
-        if bounds is not None:
-            d = min(max(d, bounds[0]), bounds[1])
-        point, tangent = track.point_at(aim_s)
-        return float(point[0] - tangent[1] * d), float(point[1] + tangent[0] * d), d
-
-    def _speed_target(self, kart: KartView, first: Waypoint, second: Waypoint, top: float, brake: float) -> float:
-        p = self.params
-        assert self._line is not None and self._context is not None
-        # never faster than the racing line's speed profile here (it already brakes for the corners ahead)
-        here = self._line.speed_at(kart.progress)
-        target = min(top, float(here))
-        for w in (first, second):
-            dist = math.hypot(w.position[0] - kart.x, w.position[1] - kart.y)
-            allowed = math.sqrt((min(w.speed + p.speed_margin, top)) ** 2 + 2.0 * brake * p.braking_use * dist)
-            target = min(target, allowed)
-        return target
+    ) -> float:
+        """[m] the lateral offset ``kart`` steers for, driving for ``first`` and ``second`` with lanes within
+        ``tolerance`` of the racing line not corrected, held within ``bounds`` if given."""
+        state = np.array([_player_row(kart)])
+        return float(self._targets(state, np.array([_waypoint_rows(first, second)]), tolerance, bounds)[0, AIM_OFFSET])
 
     # ------------------------------------------------------------------ control
     def scene(self, observation: Observation, plan: Plan | None) -> TrafficScene:
@@ -214,37 +215,39 @@ class LQNGTracker:
         return Action(steer, action.throttle)
 
     def _solved_action(self, observation: Observation, plan: Plan | None) -> Action:
-        """The game's first control as steer and throttle, with the traffic rules' lanes, bounds and speed limits."""
+        """The game's first control as steer and throttle, with the traffic rules' lanes, bounds and speed limits
+        (the aims, speed targets and the game in compiled code: :mod:`controllers.lq.targets`)."""
         assert self._context is not None, "reset() first"
-        ctx = self._context
+        ctx, p = self._context, self.params
         track, kart = ctx.track, ctx.kart
         scene = self.scene(observation, plan)
         me, others = scene.me, scene.others
         players = [me, *others]
-        tolerance = self.params.traffic_lane_tolerance if others else self.params.lane_tolerance
+        tolerance = p.traffic_lane_tolerance if others else p.lane_tolerance
         if any(rule.exact_lanes(scene) for rule in self._exact):
             tolerance = 0.0
-        x0 = np.zeros(STATE_SIZE * len(players))
-        targets = []
-        station = math.inf
+        rows, waypoints = [], []
         for i, k in enumerate(players):
-            # positions relative to the ego kart keep the numbers small
-            x0[STATE_SIZE * i : STATE_SIZE * i + 3] = (k.x - me.x, k.y - me.y, k.speed)
+            rows.append(_player_row(k))
             first, second = scene.upcoming if i == 0 else self._upcoming(track, k, plan, k.index)
-            bounds = self._lateral_bounds(scene) if i == 0 else None
-            ax, ay, aim_offset = self._aim(track, k, first, second, tolerance, bounds)
-            heading_error = math.remainder(math.atan2(ay - k.y, ax - k.x) - k.heading, 2.0 * math.pi)
-            speed = self._speed_target(k, first, second, kart.top_speed, kart.braking)
+            waypoints.append(_waypoint_rows(first, second))
+        state = np.array(rows)
+        aims = self._targets(state, np.array(waypoints), tolerance, self._lateral_bounds(scene))
+        station = math.inf
+        for rule in self._limits:
+            station = min(station, rule.speed_limit(scene, float(aims[0, AIM_OFFSET])))
+        targets = np.empty((len(players), 4))
+        for i, (_, _, first_x, first_y, _) in enumerate(w[0] for w in waypoints):
+            speed = float(aims[i, SPEED_TARGET])
             if i == 0:
-                for rule in self._limits:
-                    station = min(station, rule.speed_limit(scene, aim_offset))
-                speed = min(speed * self.params.speed_scale, station)
-            targets.append((first.position[0] - me.x, first.position[1] - me.y, speed, heading_error))
-        P, alpha = self._solve(players, targets, plan)
+                speed = min(speed * p.speed_scale, station)
+            # the game's position target is the first waypoint (relative to the ego), its heading target the aim
+            targets[i] = (first_x - me.x, first_y - me.y, speed, aims[i, HEADING_ERROR])
+        P, alpha, x0 = self._solve(state, targets, players, plan)
         accel, yaw_rate = -(P[0][0:2] @ x0) - alpha[0][0:2]
         if me.speed > station:
             # over a traffic rule's limit: brake at once (the LQ speed weight is too soft for it)
-            accel = min(float(accel), -self.params.limit_brake_gain * (me.speed - station))
+            accel = min(float(accel), -p.limit_brake_gain * (me.speed - station))
         throttle = throttle_for_acceleration(self._kart_vector, me.speed, float(accel))
         speed = max(abs(me.speed), 1.0)
         steer = min(max(math.atan(yaw_rate * kart.wheelbase / speed) / kart.max_steer_angle, -1.0), 1.0)
@@ -267,34 +270,24 @@ class LQNGTracker:
         self._steer = steer
 
     def _solve(
-        self, players: list[KartView], targets: list[tuple[float, float, float, float]], plan: Plan | None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """The game's feedback Nash gains (``P``, ``alpha``), eq. (23) lqng_obj for every player: its waypoint
-        (20) paid, the separation from each other player (22) earned, and for the ego alone the denial (21) of
-        each opponent's predicted waypoint. The opponents are assumed to play the same game with their own
-        avoidance scale and no denial."""
+        self, state: np.ndarray, targets: np.ndarray, players: list[KartView], plan: Plan | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The game's feedback Nash gains (``P``, ``alpha``) and its state ``x0``, eq. (23) lqng_obj for every
+        player: its waypoint (20) paid, the separation from each other player (22) earned, and for the ego alone
+        the denial (21) of each opponent's predicted waypoint. The opponents are assumed to play the same game
+        with their own avoidance scale and no denial."""
         w = self.params.weights
-        me = players[0]
-        count = len(players)
-        separation = np.zeros((count, count))
-        denied = np.zeros(count, dtype=np.bool_)
-        for i, k in enumerate(players):
-            scale = w.avoid_scale if i == 0 else w.opponent_avoid_scale
-            for j, other in enumerate(players):
-                if j != i:
-                    dist = max(math.hypot(other.x - k.x, other.y - k.y), 0.5)
-                    separation[i, j] = 1.0 / (dist**1.5 * scale)
-            denied[i] = i > 0 and plan is not None and k.index in plan.waypoints
-        return solve_tracker_game(
-            np.array([k.heading for k in players]),
-            np.array([k.speed for k in players]),
-            np.array(targets),
-            np.array([w.position / max(1.0, k.speed) for k in players]),
+        denied = np.array([i > 0 and plan is not None and k.index in plan.waypoints for i, k in enumerate(players)])
+        return solve_targets(
+            state,
+            targets,
+            denied,
+            w.position,
             w.speed,
             w.heading,
-            separation,
-            denied,
-            w.deny / max(1.0, me.speed),
+            w.avoid_scale,
+            w.opponent_avoid_scale,
+            w.deny,
             w.control,
             DT,
             self.params.horizon,

@@ -238,8 +238,8 @@ def test_with_its_lane_changes_spent_on_a_straight_it_steers_for_no_other_lane()
     tracker.reset(RaceContext(OVAL, PAPER_KART, 0, 2, limit, 0))
     me = _on_oval(0, float(OVAL.checkpoint_s[BACK_STRAIGHT]) + 3.0, lane_2, BACK_STRAIGHT)
     far_right = Waypoint(BACK_STRAIGHT + 1, 4, tuple(OVAL.lane_point(BACK_STRAIGHT + 1, 4)), 15.0, 0.0)  # type: ignore[arg-type]
-    _, _, free = tracker._aim(OVAL, me, far_right, far_right, 0.0)
-    _, _, aim = tracker._aim(OVAL, me, far_right, far_right, 0.0, (boundary_2_3 + margin, boundary_1_2 - margin))
+    free = tracker.aim_offset(me, far_right, far_right, 0.0)
+    aim = tracker.aim_offset(me, far_right, far_right, 0.0, (boundary_2_3 + margin, boundary_1_2 - margin))
     assert free < boundary_2_3 and aim == boundary_2_3 + margin
 
 
