@@ -59,32 +59,30 @@ class Observation:
 
 def kart_views(world: World, race: int) -> tuple[KartView, ...]:
     """Views of every kart of ``race``."""
-    views = []
-    for k in range(world.n_karts):
-        f = world.fstate[race, k]
-        i = world.istate[race, k]
-        views.append(
-            KartView(
-                index=k,
-                x=float(f[st.F_X]),
-                y=float(f[st.F_Y]),
-                heading=float(f[st.F_HEADING]),
-                speed=float(f[st.F_SPEED]),
-                progress=float(f[st.F_S]),
-                lateral=float(f[st.F_D]),
-                wear=float(f[st.F_WEAR]),
-                checkpoints_passed=int(i[st.I_CP_PASSED]),
-                lane=int(i[st.I_LANE]),
-                lane_changes=int(i[st.I_LANE_COUNT]),
-                crossing_time=float(f[st.F_CROSS_TIME]),
-                crossing_speed=float(f[st.F_CROSS_SPEED]),
-                crossing_wear=float(f[st.F_CROSS_WEAR]),
-                finished=bool(i[st.I_FINISHED]),
-                lane_now=int(i[st.I_LANE_NOW]),
-                lane_changes_now=int(i[st.I_STEP_LANE_COUNT]),
-            )
+    # one conversion of the race's rows to Python numbers (what float() and int() of each entry give)
+    floats, ints = world.fstate[race].tolist(), world.istate[race].tolist()
+    return tuple(
+        KartView(
+            k,
+            f[st.F_X],
+            f[st.F_Y],
+            f[st.F_HEADING],
+            f[st.F_SPEED],
+            f[st.F_S],
+            f[st.F_D],
+            f[st.F_WEAR],
+            i[st.I_CP_PASSED],
+            i[st.I_LANE],
+            i[st.I_LANE_COUNT],
+            f[st.F_CROSS_TIME],
+            f[st.F_CROSS_SPEED],
+            f[st.F_CROSS_WEAR],
+            bool(i[st.I_FINISHED]),
+            i[st.I_LANE_NOW],
+            i[st.I_STEP_LANE_COUNT],
         )
-    return tuple(views)
+        for k, (f, i) in enumerate(zip(floats, ints, strict=True))
+    )
 
 
 def observe(world: World, race: int = 0) -> list[Observation]:

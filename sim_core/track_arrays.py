@@ -3,6 +3,8 @@ ray grid (:mod:`sim_core.ray_grid`) the sensors read."""
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 
 from sim_core.kernel_arrays import TrackArrays
@@ -52,6 +54,31 @@ def _sliding_min(values: np.ndarray, half_window: int) -> np.ndarray:
     for shift in range(1, half_window + 1):
         out = np.minimum(out, np.minimum(np.roll(values, shift), np.roll(values, -shift)))
     return np.ascontiguousarray(out)
+
+
+_ARRAYS: dict[bytes, TrackArrays] = {}
+
+
+def track_fingerprint(track: Track) -> bytes:
+    """A digest of everything :func:`track_arrays` reads of ``track``: two tracks with one fingerprint have the
+    same arrays (a track loaded twice from one file, or a race's and its planner's copy)."""
+    digest = hashlib.blake2b(digest_size=20)
+    digest.update(repr((track.name, track.length, track.lane_fractions, track.checkpoints, track.sections)).encode())
+    for array in (track.centre_xy, track.centre_s, track.width_left, track.width_right, track.checkpoint_s):
+        digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
+    for array in (track.lane_half_left, track.lane_half_right, track.straight_flags):
+        digest.update(np.ascontiguousarray(array).tobytes())
+    return digest.digest()
+
+
+def shared_track_arrays(track: Track) -> TrackArrays:
+    """:func:`track_arrays`, built once per process for each track (its ray grid costs a tenth of a second, and
+    a tournament builds a world per chunk of races). The arrays are shared: no kernel writes to them."""
+    key = track_fingerprint(track)
+    arrays = _ARRAYS.get(key)
+    if arrays is None:
+        arrays = _ARRAYS[key] = track_arrays(track)
+    return arrays
 
 
 def track_arrays(track: Track) -> TrackArrays:

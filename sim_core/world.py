@@ -19,7 +19,7 @@ from sim_core.rules import race_winner, safety_score
 from sim_core.sensors import prepare_rays, sense_batch
 from sim_core.step import step_batch
 from sim_core.track import Track
-from sim_core.track_arrays import track_arrays
+from sim_core.track_arrays import shared_track_arrays
 
 MAX_KARTS = 8
 DEFAULT_START_LANES = (2, 3, 1, 4)
@@ -99,7 +99,7 @@ class World:
         self.n_races = n_races
         self.n_karts = n_karts
         self.sensors = sensors
-        self.arrays = track_arrays(track)
+        self.arrays = shared_track_arrays(track)
         self.kart_vector = self.params.kart.as_array()  # the reference kart (bodies, sensors)
         # every kart's own parameters (B, K, P): the reference kart, or it at a pace (:meth:`set_pace`)
         self.kart_rows = np.tile(self.kart_vector, (n_races, n_karts, 1))
