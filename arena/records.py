@@ -53,6 +53,7 @@ class RaceFigures:
     conditions: str | None = None  # the race conditions' set (None: not known, e.g. the original's logs)
     duration: float | None = None  # [s] simulated race time
     race_id: str | None = None  # where the race is stored (None: not stored)
+    teams: tuple[str, ...] | None = None  # each kart's team (None: every kart for itself; :mod:`arena.teams`)
     extra: Mapping[str, object] = field(default_factory=dict)
 
     @property

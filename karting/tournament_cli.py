@@ -4,6 +4,7 @@ original implementation's logs), write a report, and publish a finished tourname
     karting tournament run --agents mcts-lqng,fixed-lqng --tracks oval,complex --races-per-pair 50 --id grid
     karting tournament stats --id grid --json
     karting tournament stats --original-logs ../shared/spec/original_logs --json
+    karting tournament stats --original-logs ../shared/spec/original_logs_teams --teams
     karting tournament report grid --out runs/tournaments/grid
     karting tournament publish grid --out docs/results --readme README.md
 """
@@ -181,16 +182,26 @@ def stats(
     original_logs: Annotated[
         Path | None, typer.Option(help="the original implementation's race logs (a folder of A_vs_B_TrackN.txt)")
     ] = None,
+    teams: Annotated[
+        bool, typer.Option("--teams", help="the original's team (2v2) logs (A_vs_B_TrackDuosN.txt), team-scored")
+    ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="print the stats JSON (see docs/tournaments.md)")] = False,
     db: DbOption = "karting.db",
 ) -> None:
-    """The paper's statistics of a stored tournament, or of the original's released logs."""
+    """The paper's statistics of a stored tournament, or of the original's released logs (1v1, or with
+    ``--teams`` its team races as its parser scores them, with the data's defects)."""
     from arena.original_logs import read_original_logs
     from arena.stats import tournament_stats
 
     if (tournament_id is None) == (original_logs is None):
         error("give exactly one of --id and --original-logs")
         raise typer.Exit(2)
+    if teams and original_logs is None:
+        error("--teams reads the original's team logs: give --original-logs")
+        raise typer.Exit(2)
+    if original_logs is not None and teams:
+        _team_logs(original_logs, as_json)
+        return
     if original_logs is not None:
         try:
             result = tournament_stats(read_original_logs(original_logs))
@@ -204,6 +215,63 @@ def stats(
         print_json(result.to_json())
     else:
         _print_wins(result)
+
+
+def _team_logs(folder: Path, as_json: bool) -> None:
+    """Print the original team logs' figures: per team and track as the parser counts, without copied files,
+    per pairing, and the defects."""
+    from arena.original_team_logs import read_original_team_logs, team_logs_report
+
+    try:
+        report = team_logs_report(read_original_team_logs(folder))
+    except (OSError, ValueError) as exc:
+        error(str(exc))
+        raise typer.Exit(2) from None
+    if as_json:
+        print_json(report)
+        return
+    columns = ["team", "races", "wins [95%]", "team pts", "coll.", "ILC", "safety", "DNF"]
+    for source, label in (
+        ("parser", "as the original's parser counts (copied file included)"),
+        ("genuine", "genuine files only"),
+    ):
+        for track, figures in cast(dict[str, dict[str, dict[str, object]]], report[source]).items():
+            shown = make_table(f"{track}, {label}: per kart-race", columns, keys=columns[:1], numeric=columns[1:])
+            for team, f in figures.items():
+                low, high = cast(list[float], f["wins_ci95"])
+                add_row(
+                    shown,
+                    team,
+                    str(f["races"]),
+                    f"{f['wins']} = {100 * cast(float, f['win_rate']):.1f}% [{100 * low:.0f}, {100 * high:.0f}]",
+                    f"{f['mean_points']:.2f}",
+                    f"{f['collisions_per_kart_race']:.3f}",
+                    f"{f['illegal_lane_changes_per_kart_race']:.3f}",
+                    f"{f['safety_per_kart_race']:.3f}",
+                    str(f["unfinished_karts"]),
+                )
+            console.print(shown)
+    pairs = make_table(
+        "pairings (genuine files): A-B", ["track", "A vs B", "wins", "points wins", "team pts", "coll.", "ILC", "DNF"]
+    )
+    for m in cast(list[dict[str, object]], report["matchups"]):
+        a, b = cast(list[dict[str, object]], m["figures"])
+        pw = cast(list[int], m["points_wins"])
+        add_row(
+            pairs,
+            str(m["track"]),
+            " vs ".join(cast(list[str], m["teams"])),
+            f"{a['wins']}-{b['wins']}",
+            f"{pw[0]}-{pw[1]}",
+            f"{a['mean_points']:.2f} / {b['mean_points']:.2f}",
+            f"{a['collisions_per_kart_race']:.2f} / {b['collisions_per_kart_race']:.2f}",
+            f"{a['illegal_lane_changes_per_kart_race']:.2f} / {b['illegal_lane_changes_per_kart_race']:.2f}",
+            f"{a['unfinished_karts']} / {b['unfinished_karts']}",
+        )
+    console.print(pairs)
+    console.print("defects of the data:")
+    for defect in cast(list[str], report["defects"]):
+        console.print(f"  - {defect}", soft_wrap=True, markup=False)
 
 
 @app.command()

@@ -67,3 +67,18 @@ def test_bad_tournaments_exit_with_2(tmp_path: Path) -> None:
     assert neither.exit_code == 2
     missing = runner.invoke(app, ["tournament", "report", "nope", "--db", db], env=ENV)
     assert missing.exit_code == 2 and "no tournament" in missing.output
+
+
+TEAM_LOGS = LOGS.parent / "original_logs_teams"
+
+
+@pytest.mark.skipif(not TEAM_LOGS.is_dir(), reason=f"the original's team logs are not at {TEAM_LOGS}")
+def test_stats_of_the_original_team_logs_print_team_tables_and_defects() -> None:
+    args = ["tournament", "stats", "--original-logs", str(TEAM_LOGS), "--teams"]
+    done = runner.invoke(app, args, env=ENV)
+    assert done.exit_code == 0, done.output
+    assert "as the original's parser counts" in done.output and "byte copy" in done.output
+    data = json.loads(runner.invoke(app, [*args, "--json"], env=ENV).output.strip().splitlines()[-1])
+    assert data["parser"]["combined"]["mcts-rl"]["wins"] == 254 and len(data["matchups"]) == 19
+    refused = runner.invoke(app, ["tournament", "stats", "--id", "x", "--teams"], env=ENV)
+    assert refused.exit_code == 2 and "--teams reads the original's team logs" in refused.output

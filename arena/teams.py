@@ -1,0 +1,142 @@
+"""Team races scored: points by finishing place, the race's winning team, and per-team figures over many races
+with 95% intervals.
+
+The scoring is the original team experiment's (its ``experiment_log_parser.py``; ``../shared/spec/teams.md`` §3),
+which a points table can replace:
+
+* a kart finishes if it completed every lap; finishers are placed by race time, equal times in kart order (the
+  original's parser keeps log order; :attr:`TeamResult.tied` says when that decided a place);
+* places pay ``points`` (the original's 10 / 7.5 / 6 / 4); a kart that did not finish scores 0 and takes no place;
+* the race is won by the team of the fastest finisher (none when nobody finished); a team's points are its karts'.
+
+A race's teams are ``RaceFigures.teams`` (one label per kart).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+from arena.intervals import Interval, bootstrap_mean, wilson
+from arena.records import RaceFigures
+
+ORIGINAL_POINTS: tuple[float, ...] = (10.0, 7.5, 6.0, 4.0)  # 1st, 2nd, 3rd, 4th (the original's team races)
+
+
+@dataclass(frozen=True)
+class TeamResult:
+    """One race's outcome for its teams."""
+
+    order: tuple[int, ...]  # the finishers' kart indices, first place first
+    winner: str | None  # the team of the fastest finisher (None: nobody finished)
+    points: Mapping[str, float]  # team -> the points of its karts
+    tied: bool  # two finishers with the same race time (kart order placed them)
+
+    @property
+    def points_winner(self) -> str | None:
+        """The team with the most points (None: a tie for the most, or no points at all)."""
+        ranked = sorted(self.points.items(), key=lambda item: -item[1])
+        if not ranked or ranked[0][1] == 0.0 or (len(ranked) > 1 and ranked[1][1] == ranked[0][1]):
+            return None
+        return ranked[0][0]
+
+
+def race_teams(race: RaceFigures) -> tuple[str, ...]:
+    """Each kart's team; ``ValueError`` for a race without teams."""
+    if race.teams is None or len(race.teams) != len(race.karts):
+        raise ValueError(f"race {race.index} on {race.track} has no team for every kart")
+    return race.teams
+
+
+def team_result(race: RaceFigures, points: Sequence[float] = ORIGINAL_POINTS) -> TeamResult:
+    """Place the finishers, pay the places ``points`` and name the winning team."""
+    teams = race_teams(race)
+    finishers = sorted((k.total_time, i) for i, k in enumerate(race.karts) if k.finished and k.total_time is not None)
+    order = tuple(i for _, i in finishers)
+    scored = dict.fromkeys(teams, 0.0)
+    for place, kart in enumerate(order):
+        scored[teams[kart]] += points[place] if place < len(points) else 0.0
+    times = [time for time, _ in finishers]
+    return TeamResult(order, teams[order[0]] if order else None, scored, len(set(times)) < len(times))
+
+
+@dataclass(frozen=True)
+class TeamFigures:
+    """One team's figures over races it took part in (per kart-race: summed over its karts, over karts × races)."""
+
+    team: str
+    races: int
+    wins: int  # races its fastest finisher won
+    wins_ci95: Interval | None  # Wilson
+    mean_points: float  # per race, the team's karts together
+    points_ci95: Interval | None  # bootstrap
+    kart_races: int
+    collisions: float  # collisions at fault per kart-race
+    illegal_lane_changes: float  # per kart-race, under each kart's safety rule
+    safety: float  # the two together
+    safety_ci95: Interval | None  # bootstrap over kart-races
+    unfinished: int  # karts that did not finish
+
+    @property
+    def win_rate(self) -> float:
+        """Share of its races won."""
+        return self.wins / self.races if self.races else 0.0
+
+    def to_json(self) -> dict[str, object]:
+        """The figures as JSON."""
+
+        def interval(ci: Interval | None) -> list[float] | None:
+            return None if ci is None else ci.to_json()
+
+        return {
+            "team": self.team,
+            "races": self.races,
+            "wins": self.wins,
+            "win_rate": self.win_rate,
+            "wins_ci95": interval(self.wins_ci95),
+            "mean_points": self.mean_points,
+            "points_ci95": interval(self.points_ci95),
+            "kart_races": self.kart_races,
+            "collisions_per_kart_race": self.collisions,
+            "illegal_lane_changes_per_kart_race": self.illegal_lane_changes,
+            "safety_per_kart_race": self.safety,
+            "safety_ci95": interval(self.safety_ci95),
+            "unfinished_karts": self.unfinished,
+        }
+
+
+def team_figures(races: Sequence[RaceFigures], points: Sequence[float] = ORIGINAL_POINTS) -> dict[str, TeamFigures]:
+    """Every team's figures over ``races`` (each race counts for the teams in it), teams in order of appearance."""
+    played: dict[str, list[float]] = {}
+    won: dict[str, int] = {}
+    safety: dict[str, list[int]] = {}
+    collisions: dict[str, int] = {}
+    unfinished: dict[str, int] = {}
+    for race in races:
+        result = team_result(race, points)
+        for team, scored in result.points.items():
+            played.setdefault(team, []).append(scored)
+            won[team] = won.get(team, 0) + (result.winner == team)
+        for team, kart in zip(race_teams(race), race.karts, strict=True):
+            safety.setdefault(team, []).append(kart.safety_score)
+            collisions[team] = collisions.get(team, 0) + kart.collisions_at_fault
+            unfinished[team] = unfinished.get(team, 0) + (not kart.finished)
+    figures = {}
+    for team, scores in played.items():
+        kart_races = len(safety[team])
+        total_safety = sum(safety[team])
+        figures[team] = TeamFigures(
+            team=team,
+            races=len(scores),
+            wins=won[team],
+            wins_ci95=wilson(won[team], len(scores)),
+            mean_points=sum(scores) / len(scores),
+            points_ci95=bootstrap_mean(scores),
+            kart_races=kart_races,
+            collisions=collisions[team] / kart_races,
+            illegal_lane_changes=(total_safety - collisions[team]) / kart_races,
+            safety=total_safety / kart_races,
+            safety_ci95=bootstrap_mean(safety[team]),
+            unfinished=unfinished[team],
+        )
+    return figures
