@@ -42,6 +42,7 @@ class RaceJob:
     plan_latency: float = 0.1  # [s]
     background_planners: tuple[str, ...] = ()  # agents given an MCTS planner in the background (Δr, Δv only)
     conditions: str = "paper"  # the race conditions' set (:mod:`sim_core.conditions`), drawn from the seed
+    teams: tuple[str, ...] | None = None  # each kart's team (None: every kart for itself)
 
     def spec(self) -> RaceSpec:
         """The headless race to run."""
@@ -190,4 +191,5 @@ def race_figures(
         conditions=job.conditions,
         duration=duration,
         race_id=race_id,
+        teams=job.teams,
     )

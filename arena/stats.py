@@ -42,6 +42,7 @@ from arena.intervals import Interval, bootstrap_mean, wilson
 from arena.ratings import Rating, ratings
 from arena.records import COUNTING_RULES, KartFigures, RaceFigures, winner_index
 from arena.start_lanes import StartLanes, start_lane_table
+from arena.teams import TeamPair, team_pairs
 
 ALPHA = 0.05
 COMBINED = "combined"
@@ -147,6 +148,7 @@ class TrackStats:
     metric_tests: Mapping[str, Mapping[tuple[str, str], PairTest]]  # metric -> (a, b) -> t-test
     start_lanes: StartLanes
     pairs: Mapping[frozenset[str], PairRaces] = field(default_factory=dict)  # each pair's races, by its agents
+    team_pairs: Mapping[frozenset[str], TeamPair] = field(default_factory=dict)  # team races, by the two teams
 
     def win_rate(self, a: str, b: str) -> tuple[float, Interval] | None:
         """``a``'s share of its races against ``b`` won, and its 95% Wilson interval (``None``: they never met)."""
@@ -198,10 +200,12 @@ class TrackStats:
                 table[a][b] = test.to_json()
                 table[b][a] = PairTest(b, a, -test.statistic, test.p_value).to_json()
             metric_tests[metric] = table
+        teams = [t.to_json() for pair in combinations(self.agents, 2) if (t := self.team_pairs.get(frozenset(pair)))]
         return {
             "wins": {a: dict(self.wins[a]) for a in self.agents},
             "safety": {a: self.agent_stats[a].to_json() for a in self.agents},
             "start_lanes": self.start_lanes.to_json(),
+            **({"teams": teams} if teams else {}),
             "tests": {
                 "alpha": ALPHA,
                 "wins": win_tests,
@@ -251,7 +255,9 @@ def win_table(races: Sequence[RaceFigures], agents: Sequence[str]) -> dict[str, 
         if index is None:
             continue
         winner = race.karts[index].agent
-        for loser in race.agents:
+        # a team race counts once against each agent of the other teams (team-mates are not beaten)
+        teams: Sequence[object] = race.teams or range(len(race.karts))
+        for loser in {k.agent for k, team in zip(race.karts, teams, strict=True) if team != teams[index]}:
             if loser != winner:
                 wins[winner][loser] += 1
     met = {frozenset(race.agents) for race in races}
@@ -337,10 +343,10 @@ def race_outcome(race: RaceFigures) -> tuple[object, ...]:
 
 
 def pair_races(races: Sequence[RaceFigures]) -> dict[frozenset[str], PairRaces]:
-    """Every pair's races and distinct outcomes (two-kart races of two different agents)."""
+    """Every pair's races and distinct outcomes (two-kart races of two different agents, or team races of two)."""
     outcomes: dict[frozenset[str], list[tuple[object, ...]]] = {}
     for race in races:
-        if len(race.karts) == 2 and race.agents[0] != race.agents[1]:
+        if len(set(race.agents)) == 2 and (len(race.karts) == 2 or race.teams is not None):
             outcomes.setdefault(frozenset(race.agents), []).append(race_outcome(race))
     return {pair: PairRaces(len(found), len(set(found))) for pair, found in outcomes.items()}
 
@@ -365,6 +371,7 @@ def track_stats(races: Sequence[RaceFigures]) -> TrackStats:
         metric_tests,
         start_lane_table(races, agents),
         pair_races(races),
+        team_pairs(races),
     )
 
 

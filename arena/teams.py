@@ -140,3 +140,48 @@ def team_figures(races: Sequence[RaceFigures], points: Sequence[float] = ORIGINA
             unfinished=unfinished[team],
         )
     return figures
+
+
+@dataclass(frozen=True)
+class TeamPair:
+    """Two teams' races against each other: each team's figures, and the mirrored pairs of races (the same seed,
+    the teams' slots swapped) that both ran: those each team won once were decided by the grid, not the team."""
+
+    first: TeamFigures
+    second: TeamFigures
+    mirrored_pairs: int
+    split_pairs: int  # mirrored pairs won once by each team
+
+    def to_json(self) -> dict[str, object]:
+        """The pair as JSON."""
+        return {
+            "teams": [self.first.team, self.second.team],
+            "figures": [self.first.to_json(), self.second.to_json()],
+            "mirrored_pairs": self.mirrored_pairs,
+            "split_pairs": self.split_pairs,
+        }
+
+
+def team_pairs(
+    races: Sequence[RaceFigures], points: Sequence[float] = ORIGINAL_POINTS
+) -> dict[frozenset[str], TeamPair]:
+    """Every pair of teams that met in races of exactly two teams (races without teams are left out)."""
+    grouped: dict[frozenset[str], list[RaceFigures]] = {}
+    for race in races:
+        if race.teams is not None and len(set(race.teams)) == 2:
+            grouped.setdefault(frozenset(race.teams), []).append(race)
+    found = {}
+    for pair, group in grouped.items():
+        first, second = dict.fromkeys(group[0].teams or ())
+        figures = team_figures(group, points)
+        by_seed: dict[object, list[str | None]] = {}
+        for race in group:
+            by_seed.setdefault(race.seed, []).append(team_result(race, points).winner)
+        mirrored = [winners for seed, winners in by_seed.items() if seed is not None and len(winners) == 2]
+        found[pair] = TeamPair(
+            figures[first],
+            figures[second],
+            len(mirrored),
+            sum(winners[0] is not None and winners[1] is not None and winners[0] != winners[1] for winners in mirrored),
+        )
+    return found

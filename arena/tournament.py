@@ -38,6 +38,12 @@ log = logging.getLogger(__name__)
 Backend = Literal["process", "inline", "ray"]
 BACKENDS: tuple[Backend, ...] = ("process", "inline", "ray")
 START_LANES = (2, 3)  # the original's two start lanes, swapped every other race
+TEAM_GRID_LANES = (2, 3, 1, 4)  # a team race's grid: one row, side by side (every kart the same distance to the flag)
+# the slots of the first team in a team race, by the race's number in its pair and track: the three ways to split
+# the row in two, each raced twice with the teams' slots swapped (a mirrored pair: the same seed, so the same
+# conditions per slot)
+TEAM_SPLITS = ((0, 1), (0, 2), (0, 3))
+MAX_TEAM_SIZE = len(TEAM_GRID_LANES) // 2
 BATCH_RACES = 8  # races per chunk at most: a chunk's races of one track advance together in one world
 
 
@@ -65,6 +71,9 @@ class TournamentSpec:
     # the race conditions (sim_core.conditions.CONDITION_SETS), drawn from each race's seed: "varied" samples launch
     # reactions, start wear and the drivers' imprecision; "paper" is the original's experiment
     conditions: str = "varied"
+    # karts per agent in each race: 1, the paper's head-to-head races; 2, team races (two karts of each agent, a
+    # team, on a one-row grid in mirrored pairs of races: :meth:`jobs`)
+    team_size: int = 1
 
     def problems(self) -> dict[str, str]:
         """What is wrong with this spec, by field (empty: nothing)."""
@@ -94,6 +103,15 @@ class TournamentSpec:
             found["tracks"] = f"unknown tracks {bad_tracks}" if bad_tracks else "give one or more tracks"
         if self.races_per_pair < 1:
             found["races_per_pair"] = f"races_per_pair must be >= 1, got {self.races_per_pair}"
+        if not 1 <= self.team_size <= MAX_TEAM_SIZE:
+            found["team_size"] = (
+                f"team_size must be 1 or up to {MAX_TEAM_SIZE} (a fair grid is one row of "
+                f"{len(TEAM_GRID_LANES)}), got {self.team_size}"
+            )
+        elif self.team_size > 1 and self.races_per_pair % 2:
+            found["races_per_pair"] = (
+                f"team races come in mirrored pairs: give an even races_per_pair, not {self.races_per_pair}"
+            )
         if self.conditions not in CONDITION_SETS:
             found["conditions"] = f"unknown conditions {self.conditions!r}; known: {sorted(CONDITION_SETS)}"
         return found
@@ -110,20 +128,29 @@ class TournamentSpec:
         return list(combinations(self.agents, 2))
 
     def jobs(self) -> list[RaceJob]:
-        """The schedule: per track, per pair, ``races_per_pair`` races; even races put the pair's first agent in
-        lane 2, odd ones in lane 3. A paired design: race ``r`` of every pair on a track has the same seed
-        (``numpy.random.SeedSequence([seed, track, r])``), so the same conditions."""
+        """The schedule: per track, per pair, ``races_per_pair`` races. A paired design: race ``r`` of every pair on
+        a track has the same seed (``numpy.random.SeedSequence([seed, track, r])``), so the same conditions.
+
+        Head to head (``team_size`` 1), even races put the pair's first agent in lane 2, odd ones in lane 3. Team
+        races (:meth:`team_race`) come in mirrored pairs: races ``2m`` and ``2m + 1`` have the seed of ``m`` and the
+        teams' slots swapped, and the three ways to split the row take turns."""
         jobs: list[RaceJob] = []
         for t, track in enumerate(self.tracks):
-            seeds = [race_seed(self.seed, t, r) for r in range(self.races_per_pair)]
             for a, b in self.pairs():
-                for r, seed in enumerate(seeds):
-                    index = len(jobs)
-                    lanes = START_LANES if r % 2 == 0 else START_LANES[::-1]
+                for r in range(self.races_per_pair):
+                    agents: tuple[str, ...]
+                    lanes: tuple[int, ...]
+                    teams: tuple[str, ...] | None
+                    if self.team_size == 1:
+                        seed = race_seed(self.seed, t, r)
+                        agents, lanes, teams = (a, b), START_LANES if r % 2 == 0 else START_LANES[::-1], None
+                    else:
+                        seed = race_seed(self.seed, t, r // 2)
+                        agents, lanes, teams = self.team_race(a, b, r)
                     job = RaceJob(
-                        index,
+                        len(jobs),
                         track,
-                        (a, b),
+                        agents,
                         seed,
                         lanes,
                         self.laps,
@@ -132,9 +159,21 @@ class TournamentSpec:
                         self.plan_latency,
                         tuple(agent for agent in (a, b) if parse_agent(agent)[0] in self.background_planners),
                         self.conditions,
+                        teams,
                     )
                     jobs.append(job)
         return jobs
+
+    def team_race(self, a: str, b: str, race: int) -> tuple[tuple[str, ...], tuple[int, ...], tuple[str, ...]]:
+        """Race ``race`` of team ``a`` against team ``b``: each kart's agent and start lane, kart by grid slot (every
+        slot in the one row of :data:`TEAM_GRID_LANES`), and each kart's team (its agent). Race ``2m`` gives ``a``
+        the slots of split ``m mod 3`` (:data:`TEAM_SPLITS`), race ``2m + 1`` the other slots."""
+        size = 2 * self.team_size
+        first = TEAM_SPLITS[(race // 2) % len(TEAM_SPLITS)] if size == 4 else tuple(range(self.team_size))
+        if race % 2:
+            first = tuple(slot for slot in range(size) if slot not in first)
+        agents = tuple(a if slot in first else b for slot in range(size))
+        return agents, TEAM_GRID_LANES[:size], agents
 
     @property
     def total(self) -> int:
@@ -171,7 +210,14 @@ class TournamentSpec:
             "races_per_pair": self.races_per_pair,
             "races": self.total,
             # the lanes of the pair's first and second agent, by the race's number in its pair and track
-            "start_lanes": {"even_races": list(START_LANES), "odd_races": list(START_LANES[::-1])},
+            "start_lanes": {"even_races": list(START_LANES), "odd_races": list(START_LANES[::-1])}
+            if self.team_size == 1
+            else {
+                "grid_lanes": list(TEAM_GRID_LANES[: 2 * self.team_size]),
+                "first_team_slots": "race 2m: TEAM_SPLITS[m % 3]; race 2m + 1: the other slots (the same seed)",
+                "splits": [list(split) for split in TEAM_SPLITS],
+            },
+            "team_size": self.team_size,
             "conditions": condition_set(self.conditions).to_json(),
             "plan_latency": self.plan_latency,
             "seed": self.seed,

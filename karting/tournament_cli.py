@@ -22,7 +22,7 @@ from karting.output import add_row, console, error, print_json
 from karting.output import table as make_table
 
 if TYPE_CHECKING:
-    from arena.stats import TournamentStats
+    from arena.stats import TournamentStats, TrackStats
     from server.tournament_db import TournamentDatabase
 
 app = typer.Typer(help="Round-robin tournaments: run, statistics, reports.", no_args_is_help=True)
@@ -58,6 +58,13 @@ def run(
         str,
         typer.Option(help="race conditions drawn from each race's seed: varied (launches, wear, imprecision) or paper"),
     ] = "varied",
+    team_size: Annotated[
+        int,
+        typer.Option(
+            help="karts per agent in a race: 1 head to head; 2 team races (two karts of each agent, one row, "
+            "mirrored pairs of races: give an even --races-per-pair)"
+        ),
+    ] = 1,
     backend: Annotated[str, typer.Option(help="process (worker processes), inline or ray")] = "process",
     workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per CPU)")] = None,
     ray_address: Annotated[str | None, typer.Option(help="Ray cluster address (default: local Ray)")] = None,
@@ -75,7 +82,15 @@ def run(
     from server.tournament_db import TournamentStatus
 
     spec = TournamentSpec(
-        _names(agents), _names(tracks), races_per_pair, seed, laps, time_limit, kart, conditions=conditions
+        _names(agents),
+        _names(tracks),
+        races_per_pair,
+        seed,
+        laps,
+        time_limit,
+        kart,
+        conditions=conditions,
+        team_size=team_size,
     )
     problems = spec.problems()
     if backend not in BACKENDS:
@@ -168,6 +183,8 @@ def _print_wins(stats: TournamentStats) -> None:
         tables = [(f"wins ({track})", wins), (f"safety ({track}): mean (std)", [header, *safety])]
         if table.start_lanes.races:
             tables.append((f"wins by start lane ({track})", start_lane_rows(table)))
+        if table.team_pairs:
+            tables.append((f"teams ({track}): per race, safety per kart-race", _team_rows(table)))
         for title, rows in tables:
             columns = [column.replace("vs ", "vs\n").replace(": ", ":\n") for column in rows[0]]
             shown = make_table(title, columns, keys=columns[:1], numeric=columns[1:])
@@ -215,6 +232,26 @@ def stats(
         print_json(result.to_json())
     else:
         _print_wins(result)
+
+
+def _team_rows(table: TrackStats) -> list[list[str]]:
+    """Each pair of teams: wins with their interval, mean points, safety per kart-race, unfinished karts, and the
+    mirrored pairs of races each team won once (the grid decided)."""
+    rows = [["team vs team", "wins [95%]", "points", "safety", "DNF", "mirrored: split"]]
+    for pair in table.team_pairs.values():
+        a, b = pair.first, pair.second
+        low, high = a.wins_ci95.low if a.wins_ci95 else 0.0, a.wins_ci95.high if a.wins_ci95 else 1.0
+        rows.append(
+            [
+                f"{a.team} vs {b.team}",
+                f"{a.wins}-{b.wins} [{100 * low:.0f}, {100 * high:.0f}]%",
+                f"{a.mean_points:.2f}-{b.mean_points:.2f}",
+                f"{a.safety:.2f}-{b.safety:.2f}",
+                f"{a.unfinished}-{b.unfinished}",
+                f"{pair.split_pairs}/{pair.mirrored_pairs}",
+            ]
+        )
+    return rows
 
 
 def _team_logs(folder: Path, as_json: bool) -> None:

@@ -28,7 +28,7 @@ from arena.report import (
     win_rows,
 )
 from arena.stats import COMBINED, Standing, leaderboard, tournament_stats
-from arena.tournament import TournamentSpec
+from arena.tournament import MAX_TEAM_SIZE, TournamentSpec
 from server.deps import API_KEY_RESPONSES, ApiKey, TournamentPlotsDep, Tournaments
 from server.limits import MAX_SEED
 from server.models import ErrorOut, JsonInt, ManifestOut, Name, not_a_bool
@@ -68,6 +68,13 @@ class TournamentIn(BaseModel):
         description="race conditions drawn from each race's seed: varied (launch reactions, start wear, the "
         "drivers' imprecision), varied-pace (varied, each kart's pace within 2% of the kart's) or paper (the "
         "original's experiment)",
+    )
+    team_size: JsonInt = Field(
+        default=1,
+        ge=1,
+        le=MAX_TEAM_SIZE,
+        description="karts per agent in a race: 1 head to head, 2 team races (two karts of each agent on one row, "
+        "in mirrored pairs of races: races_per_pair must be even)",
     )
     id: str | None = Field(default=None, pattern=TOURNAMENT_ID.pattern, description="default: a new id")
 
@@ -185,6 +192,7 @@ def _spec(body: TournamentIn) -> TournamentSpec:
         body.time_limit,
         body.kart_preset,
         conditions=body.conditions,
+        team_size=body.team_size,
     )
     problems = spec.problems()
     if problems:

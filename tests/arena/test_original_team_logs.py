@@ -109,7 +109,7 @@ def test_every_pairings_wins_are_reproduced_and_the_copied_file_is_left_out() ->
     collections = {log.path.name: log.run for log in logs.files}
     assert collections["MCTS_LQR_vs_Fixed_LQR_OvalDuos2.txt"] == 2 and collections["MCTS_RL_vs_E2E_OvalDuos.txt"] == 1
     found = {}
-    for pairing in team_logs_report(logs)["matchups"]:  # type: ignore[union-attr]
+    for pairing in team_logs_report(logs)["matchups"]:  # type: ignore[attr-defined]
         a, b = pairing["figures"]
         found[(tuple(pairing["teams"]), pairing["track"])] = (a["wins"], b["wins"])
     for (a, b), (oval, complex_) in PAIRING_WINS.items():
