@@ -56,6 +56,7 @@ class RaceJob:
             plan_latency=self.plan_latency,
             time_limit=self.time_limit,
             conditions=self.conditions,
+            teams=self.teams,
         )
 
 

@@ -31,6 +31,7 @@ class RaceContext:
     lane_change_limit: int
     seed: int
     pace: float = 1.0  # the kart's pace handicap (sim_core.params.KartParams.paced)
+    teams: tuple[int, ...] = ()  # each kart's team number, from 1 (empty: every kart for itself)
 
 
 @runtime_checkable

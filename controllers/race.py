@@ -50,11 +50,21 @@ class RaceSpec:
     # a named set of sim_core.conditions.CONDITION_SETS ("paper": the original's, "varied"), or a set of one's own
     conditions: str | ConditionSet = "paper"
     placements: tuple[Placement, ...] | None = None  # one per kart: placed karts instead of the grid
+    teams: tuple[str, ...] | None = None  # one per kart: its team (None: every kart for itself)
 
     def __post_init__(self) -> None:
         self.condition_set()  # a clear KeyError for an unknown set
         if self.placements is not None and len(self.placements) != len(self.controllers):
             raise ValueError(f"need one placement for each of the {len(self.controllers)} karts")
+        if self.teams is not None and len(self.teams) != len(self.controllers):
+            raise ValueError(f"need one team for each of the {len(self.controllers)} karts")
+
+    def team_numbers(self) -> tuple[int, ...]:
+        """Each kart's team as a number from 1, in order of first appearance (empty: no teams)."""
+        if self.teams is None:
+            return ()
+        numbers = {team: n for n, team in enumerate(dict.fromkeys(self.teams), start=1)}
+        return tuple(numbers[team] for team in self.teams)
 
     def condition_set(self) -> ConditionSet:
         """The set this race's conditions are drawn from."""
@@ -275,7 +285,10 @@ class _Race:
                 planner.plan_latency = spec.plan_latency
             kart = world.kart_params(index, k)  # at its pace: a driver plans with the kart it has
             pace = float(world.paces[index, k])
-            driver.reset(RaceContext(track, kart, k, n, world.lane_change_limit, spec.seed * 1000 + k, pace))
+            context = RaceContext(
+                track, kart, k, n, world.lane_change_limit, spec.seed * 1000 + k, pace, spec.team_numbers()
+            )
+            driver.reset(context)
         recorder = ReplayRecorder(track.name, n) if record else None
         if recorder is not None:
             recorder.allocate(round(params.rules.time_limit / DT) + 1)

@@ -262,6 +262,7 @@ class MCTSPlanner:
             wear=kart.wear,
             lane_changes=count,
             pace=self.pace_of(kart.index, ego),
+            team=self._context.teams[kart.index] if self._context.teams else 0,
         )
 
     def _with_model(self, player: PlayerState, kart: KartView, ego: int) -> PlayerState:

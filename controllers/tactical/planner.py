@@ -42,6 +42,7 @@ class PlayerState:
     model: int = rules.MODEL_FREE  # how the game plays it: searched, or an opponent model's lanes (rules.MODEL_*)
     script: tuple[int, ...] = ()  # with rules.MODEL_SCRIPT: its 0-based lane at each checkpoint of a lap (-1: none)
     pace: float = 1.0  # [-] its section times over the game's model of the kart (controllers.tactical.pace)
+    team: int = 0  # its team number from 1 (0: no team): the game values its team's result (controllers.tactical.value)
 
 
 class TacticalPlanner:
@@ -135,6 +136,7 @@ class TacticalPlanner:
             state[row, rules.WEAR] = round(min(max(p.wear, 0.0), 1.0) * WEAR_UNITS)
             state[row, rules.LANE_COUNT] = p.lane_changes
             state[row, rules.PACE] = round(p.pace * rules.PACE_UNITS)
+            state[row, rules.TEAM] = p.team
             times.append(p.time + self._advance(state[row], leader_cp, p.speed))
             self._slow_to_feasible(state[row])
         earliest = min(times)

@@ -31,7 +31,8 @@ PREV_LANE = 6  # 0-based lane at the previous checkpoint (to tell when two playe
 PREV_TIME = 7  # [0.01 s] time state at the previous checkpoint (to check a collision along the section)
 MODELLED = 8  # how the player is played: MODEL_FREE (searched) or the lanes of an opponent model (MODEL_LINE, ...)
 PACE = 9  # [1e-3] the player's section times over the game's (its measured pace, controllers.tactical.pace); 0: 1
-N_FIELDS = 10
+TEAM = 10  # the player's team number from 1; 0: no team (every player for itself)
+N_FIELDS = 11
 PACE_UNITS = 1000
 
 # values of the MODELLED field (controllers.tactical.opponents chooses one per kart)

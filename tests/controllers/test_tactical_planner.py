@@ -271,3 +271,27 @@ def test_a_pass_under_way_is_kept_while_it_still_gains_on_the_line() -> None:
     assert _advantage(planner._playout(root, 10, 10, {c: lane - 1 for c, lane in wider.items()})[0]) < (
         _advantage(kept) - HOLD_MARGIN * 100
     )
+
+
+def test_a_race_with_teams_gives_every_planner_its_karts_team_numbers() -> None:
+    """From the race's team names to the game's TEAM column: each kart's PlayerState carries its team number."""
+    from controllers.base import RaceContext
+    from controllers.race import RaceSpec
+    from controllers.tactical.high_level import MCTSPlanner
+    from sim_core.observation import observe
+    from sim_core.world import World
+
+    spec = RaceSpec("oval", ("mcts-lqng",) * 4, teams=("blue", "red", "blue", "red"))
+    assert spec.team_numbers() == (1, 2, 1, 2) and RaceSpec("oval").team_numbers() == ()
+    with pytest.raises(ValueError, match="one team for each"):
+        RaceSpec("oval", ("mcts-lqng", "e2e"), teams=("blue",))
+    track = TRACKS["oval"]
+    world = World(track, 1, 4)
+    world.reset()
+    planner = MCTSPlanner()
+    planner.reset(RaceContext(track, PAPER_KART, 0, 4, track.lane_change_limit, 0, teams=spec.team_numbers()))
+    views = observe(world)[0].karts
+    players = [planner.present_state(view, 0.0, 0) for view in views]
+    assert [p.team for p in players] == [1, 2, 1, 2]
+    state, _ = TacticalPlanner(track, PAPER_KART).root_state(players, 0)
+    assert sorted(state[:, rules.TEAM].tolist()) == [1, 1, 2, 2]

@@ -157,6 +157,38 @@ def test_terminal_values_reward_the_earlier_arrival() -> None:
     assert out[0] == pytest.approx(0.5 + 0.5 * 1.0)  # alone, a full second faster than the reference
 
 
+def test_a_team_player_values_its_teams_arrival_against_the_opponents() -> None:
+    """Players 0 and 1 a team, 2 and 3 the other (value_scale 1 s = 100 units). Player 0 arrives last of its team
+    but its team-mate first: the team's mean (5.5 s) is 0.1 s ahead of the opponents' (5.6 s), worth
+    0.5 + 0.5 * 0.8 * 0.1 = 0.54 to both team-mates and 0.46 to the opponents; the same arrivals without teams
+    give player 0 a 0.1333 s deficit on the others' mean."""
+    tb = TABLES[("oval", 1.0)]
+    state = np.zeros((4, rules.N_FIELDS), dtype=np.int64)
+    state[:, rules.TIME] = (600, 500, 550, 570)
+    state[:, rules.TEAM] = (1, 1, 2, 2)
+    reference = state[:, rules.TIME].astype(float)
+    out = np.empty(4)
+    terminal_values(tb, state, reference, out)
+    assert out == pytest.approx([0.54, 0.54, 0.46, 0.46])
+    state[:, rules.TEAM] = 0
+    terminal_values(tb, state, reference, out)
+    assert out[0] == pytest.approx(0.5 + 0.4 * ((500 + 550 + 570) / 3 - 600) / 100)
+    state[:, rules.TEAM] = (1, 1, 0, 0)  # team-mates against two karts for themselves
+    terminal_values(tb, state, reference, out)
+    assert out[0] == pytest.approx(0.54) and out[2] == pytest.approx(0.5 + 0.4 * ((500 + 600 + 570) / 3 - 550) / 100)
+
+
+def test_team_mates_alone_in_the_game_have_no_place_to_gain() -> None:
+    """Only team-mates in the game: the race term is 0 (not NaN, as the original's), own pace still counts."""
+    tb = TABLES[("oval", 1.0)]
+    state = np.zeros((2, rules.N_FIELDS), dtype=np.int64)
+    state[:, rules.TIME] = (500, 560)
+    state[:, rules.TEAM] = 3
+    out = np.empty(2)
+    terminal_values(tb, state, np.array([520.0, 560.0]), out)
+    assert out == pytest.approx([0.5 + 0.5 * 0.2 * 0.2, 0.5])
+
+
 def test_a_lone_kart_never_runs_into_a_dead_end() -> None:
     """From any lane at any checkpoint, always taking the fastest legal move completes a lap (default 1 m/s
     bins; with 2 m/s bins a few two-section dead ends remain, which the search then avoids by losing)."""
