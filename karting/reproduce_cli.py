@@ -54,3 +54,56 @@ def paper(
         reproductions.append(reproduction_of(conditions, tournament))
     write_findings(reproductions, out, readme)
     console.print(f"wrote {out}/ and the results block of {readme}")
+
+
+@app.command()
+def teams(
+    races: Annotated[
+        int | None, typer.Option(min=2, help="races per pair and track, even: mirrored pairs (default 20)")
+    ] = None,
+    seed: Annotated[int, typer.Option(help="the tournament's seed")] = 0,
+    workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per CPU)")] = None,
+    out: Annotated[Path, typer.Option(help="the team results folder")] = Path("docs/results/teams"),
+    original_logs: Annotated[
+        Path | None, typer.Option(help="the original's team logs, for its figures beside ours")
+    ] = Path("../shared/spec/original_logs_teams"),
+    db: DbOption = "runs/reproduce.db",
+) -> None:
+    """Run the five agents as 2v2 teams (oval and complex, varied conditions, a one-row grid in mirrored pairs of
+    races), publish the tournament into OUT/tournament/ and the team figures beside the original's into
+    OUT/README.md. Interrupted, it resumes where it stopped."""
+    from arena.publish import PublishError, publish
+    from arena.reproduce_teams import (
+        DEFAULT_TEAM_RACES,
+        TOURNAMENT_FOLDER,
+        team_findings,
+        team_spec,
+        team_tournament_id,
+    )
+    from arena.tournament import run_tournament
+    from server.tournament_db import TournamentStatus
+
+    races = races or DEFAULT_TEAM_RACES
+    try:
+        spec = team_spec(races, seed)
+    except ValueError as exc:
+        error(str(exc))
+        raise typer.Exit(2) from None
+    Path(db).parent.mkdir(parents=True, exist_ok=True)
+    store = open_tournaments(db)
+    tid = team_tournament_id(races, seed)
+    stored = store.create(tid, spec)
+    console.print(f"{tid}: {spec.total} races ({stored.done} stored already)")
+    started = time.perf_counter()
+    run_tournament(spec, store, tid, backend="process", workers=workers, record=False)
+    store.set_status(tid, TournamentStatus.FINISHED)
+    console.print(f"{tid}: done in {time.perf_counter() - started:.0f} s")
+    tournament = store.publishable(tid)
+    assert tournament is not None
+    try:
+        publish(tournament, out / TOURNAMENT_FOLDER, None)
+    except PublishError as exc:
+        error(f"cannot publish {tid}:\n{exc}")
+        raise typer.Exit(2) from None
+    (out / "README.md").write_text(team_findings(tournament, original_logs))
+    console.print(f"wrote {out}/")
