@@ -101,8 +101,9 @@ def original_start_lanes(experiment: int, karts: int) -> tuple[int, ...]:
     return tuple(lanes)
 
 
-def _blocks(path: Path) -> Iterator[tuple[int, int, list[tuple[int, str]]]]:
-    """(experiment number, line number, the block's lines) per race."""
+def race_blocks(path: Path) -> Iterator[tuple[int, int, list[tuple[int, str]]]]:
+    """(experiment number, line number, the block's non-empty lines) per race of a log file (the 1v1 and the team
+    logs share the layout)."""
     current: tuple[int, int] | None = None
     lines: list[tuple[int, str]] = []
     for number, line in enumerate(path.read_text().splitlines(), start=1):
@@ -141,7 +142,7 @@ def _kart(path: Path, line: int, agent: str, fields: Mapping[str, str]) -> KartF
 def read_log(log: LogFile) -> list[RaceFigures]:
     """Every race of one log file, in file order."""
     races = []
-    for experiment, line, lines in _blocks(log.path):
+    for experiment, line, lines in race_blocks(log.path):
         per_agent: dict[str, dict[str, str]] = {}
         for number, text in lines:
             if _WINNER.match(text):

@@ -18,13 +18,13 @@ from __future__ import annotations
 import hashlib
 import re
 from collections import Counter
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import permutations
 from pathlib import Path
 
-from arena.original_logs import AGENT_NAMES, TRACK_NAMES, LogFormatError
+from arena.original_logs import AGENT_NAMES, TRACK_NAMES, LogFormatError, race_blocks
 from arena.records import CHECKPOINT, KartFigures, RaceFigures
 from arena.teams import team_figures, team_result
 
@@ -35,7 +35,6 @@ TIME_LIMIT = 120.0  # [s] the original's episode length (its DNFs log this, or a
 TAKEN_OUT = 1.0  # [s] a non-finisher logged this long before the limit was taken out of the race
 
 _FILE = re.compile(r"^(?P<a>[A-Za-z0-9_]+)_vs_(?P<b>[A-Za-z0-9_]+)_(?P<track>Oval|Complex)Duos(?P<run>\d*)\.txt$")
-_EXPERIMENT = re.compile(r"^Experiment\s+(\d+)\s*$")
 _FIELD = re.compile(r"^(?P<type>[A-Za-z0-9-]+)\((?P<member>\d+)\) (?P<field>[A-Za-z ]+?):\s*(?P<value>.*)$")
 
 
@@ -79,30 +78,15 @@ def team_log_files(folder: str | Path) -> list[TeamLogFile]:
     return sorted(found.values(), key=lambda log: (list(TRACK_NAMES.values()).index(log.track), log.path.name))
 
 
-def _blocks(path: Path) -> Iterator[tuple[int, int, list[tuple[int, str]]]]:
-    current: tuple[int, int] | None = None
-    lines: list[tuple[int, str]] = []
-    for number, line in enumerate(path.read_text().splitlines(), start=1):
-        match = _EXPERIMENT.match(line)
-        if match is not None:
-            if current is not None:
-                yield current[0], current[1], lines
-            current, lines = (int(match[1]), number), []
-        elif line.strip() and not line.startswith("Winner:"):  # the winner line is empty or wrong: not read
-            if current is None:
-                raise LogFormatError(f"{path.name}:{number}: a field before the first 'Experiment N'")
-            lines.append((number, line))
-    if current is not None:
-        yield current[0], current[1], lines
-
-
 def read_team_log(log: TeamLogFile) -> list[RaceFigures]:
     """Every race of one file, in file order; ``extra`` holds the file, the karts' slots, laps completed of the
     race's laps, and the logged time of every kart (a non-finisher's: the limit, or when it was taken out)."""
     races = []
-    for experiment, line, lines in _blocks(log.path):
+    for experiment, line, lines in race_blocks(log.path):
         karts: dict[str, dict[str, str]] = {}
         for number, text in lines:
+            if text.startswith("Winner:"):  # empty, or wrong where filled: not read
+                continue
             match = _FIELD.match(text)
             if match is None or match["type"] not in AGENT_NAMES:
                 raise LogFormatError(f"{log.path.name}:{number}: not 'TYPE(i) Field: value' of a known type: {text!r}")

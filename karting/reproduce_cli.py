@@ -4,12 +4,17 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from karting.output import console, error
 from karting.tournament_cli import DbOption, open_tournaments
+
+if TYPE_CHECKING:
+    from arena.publish import Tournament
+    from arena.tournament import TournamentSpec
+    from server.tournament_db import TournamentDatabase
 
 app = typer.Typer(help="Regenerate the published results (docs/results/) from scratch.", no_args_is_help=True)
 
@@ -27,10 +32,7 @@ def paper(
     """Run the paper's round robin (five agents, oval and complex) under paper and varied conditions, publish
     each into OUT/CONDITIONS/ and the findings beside the paper's into OUT/README.md and the README's results
     block. Interrupted, it resumes where it stopped (the races are stored in DB)."""
-    from arena.publish import PublishError, publish
     from arena.reproduce import reproduction_of, reproduction_spec, tournament_id, write_findings
-    from arena.tournament import run_tournament
-    from server.tournament_db import TournamentStatus
 
     Path(db).parent.mkdir(parents=True, exist_ok=True)
     store = open_tournaments(db)
@@ -38,19 +40,7 @@ def paper(
     for conditions, races in (("paper", races_paper), ("varied", races_varied)):
         spec = reproduction_spec(conditions, races, seed)
         tid = tournament_id(conditions, races, seed)
-        stored = store.create(tid, spec)
-        console.print(f"{tid}: {spec.total} races ({stored.done} stored already)")
-        started = time.perf_counter()
-        run_tournament(spec, store, tid, backend="process", workers=workers, record=False)
-        store.set_status(tid, TournamentStatus.FINISHED)
-        console.print(f"{tid}: done in {time.perf_counter() - started:.0f} s")
-        tournament = store.publishable(tid)
-        assert tournament is not None
-        try:
-            publish(tournament, out / conditions, None)
-        except PublishError as exc:
-            error(f"cannot publish {tid}:\n{exc}")
-            raise typer.Exit(2) from None
+        tournament = _run_and_publish(store, tid, spec, workers, out / conditions)
         reproductions.append(reproduction_of(conditions, tournament))
     write_findings(reproductions, out, readme)
     console.print(f"wrote {out}/ and the results block of {readme}")
@@ -72,7 +62,6 @@ def teams(
     """Run the five agents as 2v2 teams (oval and complex, varied conditions, a one-row grid in mirrored pairs of
     races), publish the tournament into OUT/tournament/ and the team figures beside the original's into
     OUT/README.md. Interrupted, it resumes where it stopped."""
-    from arena.publish import PublishError, publish
     from arena.reproduce_teams import (
         DEFAULT_TEAM_RACES,
         TOURNAMENT_FOLDER,
@@ -80,8 +69,6 @@ def teams(
         team_spec,
         team_tournament_id,
     )
-    from arena.tournament import run_tournament
-    from server.tournament_db import TournamentStatus
 
     races = races or DEFAULT_TEAM_RACES
     try:
@@ -92,6 +79,19 @@ def teams(
     Path(db).parent.mkdir(parents=True, exist_ok=True)
     store = open_tournaments(db)
     tid = team_tournament_id(races, seed)
+    tournament = _run_and_publish(store, tid, spec, workers, out / TOURNAMENT_FOLDER)
+    (out / "README.md").write_text(team_findings(tournament, original_logs))
+    console.print(f"wrote {out}/")
+
+
+def _run_and_publish(
+    store: TournamentDatabase, tid: str, spec: TournamentSpec, workers: int | None, folder: Path
+) -> Tournament:
+    """Run (or resume) tournament ``tid`` of ``spec`` in ``store`` and publish it into ``folder``."""
+    from arena.publish import PublishError, publish
+    from arena.tournament import run_tournament
+    from server.tournament_db import TournamentStatus
+
     stored = store.create(tid, spec)
     console.print(f"{tid}: {spec.total} races ({stored.done} stored already)")
     started = time.perf_counter()
@@ -101,9 +101,8 @@ def teams(
     tournament = store.publishable(tid)
     assert tournament is not None
     try:
-        publish(tournament, out / TOURNAMENT_FOLDER, None)
+        publish(tournament, folder, None)
     except PublishError as exc:
         error(f"cannot publish {tid}:\n{exc}")
         raise typer.Exit(2) from None
-    (out / "README.md").write_text(team_findings(tournament, original_logs))
-    console.print(f"wrote {out}/")
+    return tournament
