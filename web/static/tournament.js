@@ -31,6 +31,7 @@ function specItems(spec) {
     ["time limit", spec.time_limit === null || spec.time_limit === undefined ? "the rules'" : `${spec.time_limit} s`],
     ["kart preset", spec.kart_preset],
     ["conditions", spec.conditions || "paper"],
+    ["karts per agent", spec.team_size || 1],
   ];
   return items.flatMap(([name, value]) => [el("dt", {}, name), el("dd", {}, String(value))]);
 }
@@ -182,7 +183,7 @@ async function resume() {
   if (!current) return;
   const spec = current.spec || {};
   const body = {id: current.id};
-  for (const key of ["agents", "tracks", "races_per_pair", "seed", "laps", "time_limit", "kart_preset", "conditions"]) body[key] = spec[key];
+  for (const key of ["agents", "tracks", "races_per_pair", "seed", "laps", "time_limit", "kart_preset", "conditions", "team_size"]) body[key] = spec[key];
   const button = document.getElementById("resume");
   button.disabled = true;
   try {

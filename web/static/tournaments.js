@@ -122,6 +122,7 @@ async function launch(event) {
     time_limit: numberField("time-limit"),
     kart_preset: document.getElementById("kart-preset").value,
     conditions: document.getElementById("conditions").value,
+    team_size: Number(document.getElementById("team-size").value),
     id: id === "" ? null : id,
   };
   msg.className = "msg";
