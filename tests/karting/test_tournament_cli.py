@@ -82,3 +82,13 @@ def test_stats_of_the_original_team_logs_print_team_tables_and_defects() -> None
     assert data["parser"]["combined"]["mcts-rl"]["wins"] == 254 and len(data["matchups"]) == 19
     refused = runner.invoke(app, ["tournament", "stats", "--id", "x", "--teams"], env=ENV)
     assert refused.exit_code == 2 and "--teams reads the original's team logs" in refused.output
+
+
+def test_a_team_tournament_prints_its_team_table(tmp_path: Path) -> None:
+    args = ["tournament", "run", "--agents", "fixed-lqng,lane-follower", "--tracks", "oval", "--races-per-pair", "2"]
+    args += ["--laps", "1", "--time-limit", "40", "--team-size", "2", "--workers", "1", "--db", str(tmp_path / "t.db")]
+    done = runner.invoke(app, [*args, "--id", "teams"], env=ENV)
+    assert done.exit_code == 0, done.output
+    assert "teams (oval)" in done.output and "fixed-lqng vs lane-follower" in done.output
+    odd = runner.invoke(app, [*args[:-2], "--db", str(tmp_path / "u.db"), "--races-per-pair", "3"], env=ENV)
+    assert odd.exit_code == 2 and "mirrored pairs" in odd.output
