@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, cast
 
 import typer
 from typer.core import TyperCommand
@@ -110,10 +110,18 @@ def race(
         str, typer.Option(help="race conditions drawn from the seed: paper (the original's) or varied")
     ] = "paper",
     replay: Annotated[Path | None, typer.Option(help="write a JSON replay (poses, inputs, plans) here")] = None,
+    teams: Annotated[
+        str | None,
+        typer.Option(
+            help="comma-separated team names, one per kart (e.g. blue,red,blue,red): the planners play for "
+            "their team and the result scores the teams"
+        ),
+    ] = None,
     as_json: JsonOption = False,
 ) -> None:
     """Run a headless race between registered controllers and print the referee's result (karts numbered from
-    1; --json: the API's result object, with ``winner`` and per-kart results, as the last line)."""
+    1; --json: the API's result object, with ``winner`` and per-kart results, as the last line; with --teams also
+    ``teams``: the winning team and each team's points, as the original's team races scored them)."""
     from controllers.race import RaceSpec, run_race  # loaded on use (see the module docstring)
     from controllers.registry import controller_names, validate_agent
 
@@ -132,20 +140,40 @@ def race(
             raise typer.Exit(2) from None
     try:
         lanes = tuple(int(x) for x in start_lanes.split(",")) if start_lanes else None
-        spec = RaceSpec(track, names, laps, seed, lanes, kart, plan_latency, conditions=conditions)
+        team_names = tuple(t.strip() for t in teams.split(",")) if teams else None
+        spec = RaceSpec(track, names, laps, seed, lanes, kart, plan_latency, conditions=conditions, teams=team_names)
         outcome = run_race(spec, record=replay is not None)
     except (TrackFormatError, KeyError, ValueError) as exc:
         error(str(exc))
         raise typer.Exit(2) from None
     record = race_result_json(outcome)
+    if spec.teams is not None:
+        record["teams"] = team_scores(outcome)
     if replay is not None and outcome.replay is not None:
         outcome.replay.save(replay)
     if as_json:
         print_json(record)
         return
     _print_race(track, outcome.wall_seconds, record)
+    if "teams" in record:
+        scores = cast(dict[str, Any], record["teams"])
+        points = ", ".join(f"{team} {value:g}" for team, value in scores["points"].items())
+        console.print(f"teams: {scores['winner'] or 'nobody'} won; points {points}", markup=False)
     if replay is not None:
         console.print(f"replay written to {replay}")
+
+
+def team_scores(outcome: RaceOutcome) -> dict[str, object]:
+    """A team race's winning team and each team's points (:func:`arena.teams.team_result`)."""
+    from arena.race import kart_figures
+    from arena.records import RaceFigures
+    from arena.teams import team_result
+
+    spec = outcome.spec
+    karts = sorted(outcome.result.karts, key=lambda k: k.kart)
+    race = RaceFigures(spec.track, tuple(kart_figures(spec.controllers[k.kart], k) for k in karts), teams=spec.teams)
+    result = team_result(race)
+    return {"winner": result.winner, "points": dict(result.points), "tied": result.tied}
 
 
 def race_result_json(outcome: RaceOutcome) -> dict[str, object]:

@@ -173,3 +173,20 @@ def test_train_reward_weight_reaches_the_training_environment(monkeypatch, tmp_p
     assert seen["weights"].speed == 1.0  # the rest as the spec
     bad = runner.invoke(app, [*args, "--reward-weight", "targetlane=0"], env=NARROW)
     assert bad.exit_code == 2 and "--reward-weight" in bad.output and "target_lane" in bad.output
+
+
+def test_a_team_race_scores_the_teams_as_the_originals_team_races() -> None:
+    karts = ["--karts", "lane-follower,fixed-lqng,lane-follower,fixed-lqng", "--teams", "blue,red,blue,red"]
+    done = runner.invoke(app, [*RACE[:3], *karts, "--laps", "1", "--json"], env=NARROW)
+    assert done.exit_code == 0, done.output
+    result = json.loads(done.output.strip().splitlines()[-1])
+    order = [k["index"] for k in sorted(result["karts"], key=lambda k: k["position"]) if k["finished"]]
+    team_of = ("blue", "red", "blue", "red")
+    expected = {"blue": 0.0, "red": 0.0}
+    for place, index in enumerate(order):
+        expected[team_of[index]] += (10.0, 7.5, 6.0, 4.0)[place]
+    assert result["teams"]["points"] == expected and result["teams"]["winner"] == team_of[order[0]]
+    shown = runner.invoke(app, [*RACE[:3], *karts, "--laps", "1"], env=NARROW)
+    assert f"teams: {team_of[order[0]]} won" in shown.output
+    refused = runner.invoke(app, [*RACE, "--teams", "blue"], env=NARROW)
+    assert refused.exit_code == 2 and "need one team for each of the 2 karts" in refused.output
