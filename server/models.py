@@ -114,6 +114,14 @@ class KartIn(BaseModel):
         description="pace handicap: the kart's speed limits times this and its accelerations times its square, so "
         "that it drives the same line this much slower (1: the race's kart); a human can race a handicapped AI",
     )
+    team: str | None = Field(
+        None,
+        min_length=1,
+        max_length=MAX_NAME_LENGTH,
+        pattern=r"\S",
+        description="the kart's team (karts with the same team name race together: their planners play for the "
+        "team); none: the kart races for itself",
+    )
 
 
 class RaceIn(BaseModel):
@@ -161,6 +169,7 @@ class KartOut(BaseModel):
     name: str
     controller: str
     params: dict[str, ParamValue] = Field(default_factory=dict, description="controller parameters changed")
+    team: str | None = Field(None, description="its team (none: it races for itself)")
 
 
 class CreatedKartOut(KartOut):

@@ -29,6 +29,7 @@ class KartEntry:
     controller: str
     params: Mapping[str, ParamValue] = field(default_factory=dict)
     pace: float = 1.0
+    team: str | None = None  # karts with the same team race together (None: for itself)
 
     @property
     def human(self) -> bool:
@@ -36,20 +37,29 @@ class KartEntry:
         return self.controller == HUMAN
 
     def to_json(self) -> dict[str, Any]:
-        """``{index, name, controller, params, pace}`` (as stored with the race)."""
+        """``{index, name, controller, params, pace, team}`` (as stored with the race)."""
         return {
             "index": self.index,
             "name": self.name,
             "controller": self.controller,
             "params": dict(self.params),
             "pace": self.pace,
+            "team": self.team,
         }
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> KartEntry:
-        """Read back :meth:`to_json` (races stored before parameters or paces existed have none, and pace 1)."""
+        """Read back :meth:`to_json` (races stored before parameters, paces or teams existed have none, pace 1)."""
         params = dict(data.get("params") or {})
-        return cls(int(data["index"]), str(data["name"]), str(data["controller"]), params, float(data.get("pace", 1.0)))
+        team = data.get("team")
+        return cls(
+            int(data["index"]),
+            str(data["name"]),
+            str(data["controller"]),
+            params,
+            float(data.get("pace", 1.0)),
+            None if team is None else str(team),
+        )
 
 
 @dataclass(frozen=True)
@@ -89,5 +99,16 @@ def driver_context(config: RaceConfig, world: World, kart: int) -> RaceContext:
         world.lane_change_limit,
         config.seed * 1000 + kart,
         float(world.paces[0, kart]),
+        team_numbers([k.team for k in config.karts]),
     )
     return context
+
+
+def team_numbers(teams: Sequence[str | None]) -> tuple[int, ...]:
+    """Each kart's team number from 1 in order of first appearance, a kart without a team alone in its own
+    (empty: no kart has a team)."""
+    if all(team is None for team in teams):
+        return ()
+    labels = [team if team is not None else f"\0{k}" for k, team in enumerate(teams)]
+    numbers = {label: n for n, label in enumerate(dict.fromkeys(labels), start=1)}
+    return tuple(numbers[label] for label in labels)

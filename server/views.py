@@ -53,7 +53,9 @@ def telemetry_url(race_id: str) -> str:
 
 def kart_view(kart: KartEntry) -> KartOut:
     """A kart of a race."""
-    return KartOut(index=kart.index, name=kart.name, controller=kart.controller, params=dict(kart.params))
+    return KartOut(
+        index=kart.index, name=kart.name, controller=kart.controller, params=dict(kart.params), team=kart.team
+    )
 
 
 def created_view(snapshot: RaceSnapshot, tokens: dict[int, str], viewer: bool) -> RaceCreatedOut:

@@ -94,7 +94,8 @@ def race_config(body: RaceIn, catalogue: Mapping[str, ControllerSpec], max_laps:
     if errors or track is None:
         raise RequestValidationError(errors)
     karts = tuple(
-        KartEntry(i, names[i], kart.controller, dict(kart.params), kart.pace) for i, kart in enumerate(body.karts)
+        KartEntry(i, names[i], kart.controller, dict(kart.params), kart.pace, kart.team)
+        for i, kart in enumerate(body.karts)
     )
     return RaceConfig(
         track_name=body.track,

@@ -259,3 +259,29 @@ def test_the_drive_client_example_runs_as_written(live: LiveServer) -> None:
     )
     assert done.returncode == 0, done.stderr
     assert "race finished" in done.stdout and "drive_client.py" in done.stdout
+
+
+def test_a_live_team_race_gives_every_planner_its_karts_teams(client: httpx.Client) -> None:
+    """Karts with a ``team`` race together: the race keeps each kart's team, and each driver's context numbers
+    the teams (a kart without one alone in its own); a blank team is a 422 naming it."""
+    from server.race_config import KartEntry, RaceConfig, driver_context, team_numbers
+    from sim_core.track_io import get_track
+    from sim_core.world import World
+
+    karts = [
+        {"controller": "lane-follower", "team": "blue"},
+        {"controller": "lane-follower", "team": "red"},
+        {"controller": "lane-follower", "team": "blue"},
+        {"controller": "lane-follower"},
+    ]
+    race = start_race(client, track="oval", laps=1, karts=karts)
+    assert [k["team"] for k in race["karts"]] == ["blue", "red", "blue", None]
+    assert [k["team"] for k in client.get(f"/api/races/{race['id']}").json()["karts"]] == ["blue", "red", "blue", None]
+    client.post(f"/api/races/{race['id']}/stop")
+    assert team_numbers(["blue", "red", "blue", None]) == (1, 2, 1, 3) and team_numbers([None, None]) == ()
+    entries = tuple(KartEntry(i, f"k{i}", "lane-follower", team=k.get("team")) for i, k in enumerate(karts))
+    track = get_track("oval")
+    config = RaceConfig("oval", track, 1, 0, None, "paper", entries)
+    assert driver_context(config, World(track, 1, 4), 2).teams == (1, 2, 1, 3)
+    blank = client.post("/api/races", json={"track": "oval", "karts": [{"controller": "e2e", "team": " "}] * 2})
+    assert blank.status_code == 422 and any(e["loc"][-1] == "team" for e in blank.json()["detail"])
