@@ -67,7 +67,8 @@ def tournament_id(conditions: str, races_per_pair: int, seed: int = 0) -> str:
     return f"paper-{conditions}-{races_per_pair}-s{seed}"
 
 
-def _rate(wins: int, races: int) -> str:
+def rate_text(wins: int, races: int) -> str:
+    """``wins/races = x% [low, high]`` with the 95% Wilson interval (``-`` without races)."""
     interval = wilson(wins, races)
     if interval is None:
         return "-"
@@ -84,16 +85,16 @@ def findings_rows(reproductions: Sequence[Reproduction]) -> list[list[str]]:
     """The paper's headline figures beside ours under each condition set, with 95% Wilson intervals."""
     header = ["finding", "paper", *(f"ours, `{r.conditions}` conditions" for r in reproductions)]
     rows = [header]
-    cells = ["MCTS-RL's share of its races won", _rate(*PAPER_MCTS_RL_WINS)]
+    cells = ["MCTS-RL's share of its races won", rate_text(*PAPER_MCTS_RL_WINS)]
     for r in reproductions:
-        cells.append(_rate(*overall_wins(r.stats, "mcts-rl")))
+        cells.append(rate_text(*overall_wins(r.stats, "mcts-rl")))
     rows.append(cells)
     for (a, b), paper_wins in PAPER_WINS.items():
-        cells = [f"{a} against {b}", _rate(paper_wins, 100)]
+        cells = [f"{a} against {b}", rate_text(paper_wins, 100)]
         for r in reproductions:
             table = r.stats.tracks[COMBINED]
             pair = table.pairs.get(frozenset((a, b)))
-            cells.append(_rate(table.wins[a][b], pair.races) if pair else "-")
+            cells.append(rate_text(table.wins[a][b], pair.races) if pair else "-")
         rows.append(cells)
     cells = ["pairs whose every race the start lane decided", "-"]
     for r in reproductions:

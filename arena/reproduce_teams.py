@@ -15,7 +15,7 @@ from pathlib import Path
 from arena.original_team_logs import read_original_team_logs
 from arena.publish import Tournament
 from arena.records import RaceFigures
-from arena.reproduce import PAPER_AGENTS
+from arena.reproduce import PAPER_AGENTS, rate_text
 from arena.stats import COMBINED, tournament_stats
 from arena.teams import TeamFigures, team_figures
 from arena.tournament import TournamentSpec
@@ -37,11 +37,7 @@ def team_tournament_id(races_per_pair: int, seed: int = 0) -> str:
 
 
 def _rate(figures: TeamFigures | None) -> str:
-    if figures is None:
-        return "-"
-    ci = figures.wins_ci95
-    shown = f"{figures.wins}/{figures.races} = {100 * figures.win_rate:.0f}%"
-    return shown if ci is None else f"{shown} [{100 * ci.low:.0f}, {100 * ci.high:.0f}]"
+    return "-" if figures is None else rate_text(figures.wins, figures.races)
 
 
 def _safety(figures: TeamFigures | None) -> str:

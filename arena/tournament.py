@@ -168,12 +168,11 @@ class TournamentSpec:
         """Race ``race`` of team ``a`` against team ``b``: each kart's agent and start lane, kart by grid slot (every
         slot in the one row of :data:`TEAM_GRID_LANES`), and each kart's team (its agent). Race ``2m`` gives ``a``
         the slots of split ``m mod 3`` (:data:`TEAM_SPLITS`), race ``2m + 1`` the other slots."""
-        size = 2 * self.team_size
-        first = TEAM_SPLITS[(race // 2) % len(TEAM_SPLITS)] if size == 4 else tuple(range(self.team_size))
+        first: tuple[int, ...] = TEAM_SPLITS[(race // 2) % len(TEAM_SPLITS)]
         if race % 2:
-            first = tuple(slot for slot in range(size) if slot not in first)
-        agents = tuple(a if slot in first else b for slot in range(size))
-        return agents, TEAM_GRID_LANES[:size], agents
+            first = tuple(slot for slot in range(len(TEAM_GRID_LANES)) if slot not in first)
+        agents = tuple(a if slot in first else b for slot in range(len(TEAM_GRID_LANES)))
+        return agents, TEAM_GRID_LANES, agents
 
     @property
     def total(self) -> int:
@@ -213,7 +212,7 @@ class TournamentSpec:
             "start_lanes": {"even_races": list(START_LANES), "odd_races": list(START_LANES[::-1])}
             if self.team_size == 1
             else {
-                "grid_lanes": list(TEAM_GRID_LANES[: 2 * self.team_size]),
+                "grid_lanes": list(TEAM_GRID_LANES),
                 "first_team_slots": "race 2m: TEAM_SPLITS[m % 3]; race 2m + 1: the other slots (the same seed)",
                 "splits": [list(split) for split in TEAM_SPLITS],
             },

@@ -3,6 +3,7 @@ from (a high-level planner that produces a :class:`~controllers.plan.Plan` and a
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
@@ -31,7 +32,17 @@ class RaceContext:
     lane_change_limit: int
     seed: int
     pace: float = 1.0  # the kart's pace handicap (sim_core.params.KartParams.paced)
-    teams: tuple[int, ...] = ()  # each kart's team number, from 1 (empty: every kart for itself)
+    teams: tuple[int, ...] = ()  # each kart's team number, from 1 (empty: every kart for itself; team_numbers)
+
+
+def team_numbers(teams: Sequence[str | None]) -> tuple[int, ...]:
+    """:attr:`RaceContext.teams` from each kart's team name: numbers from 1 in order of first appearance, a kart
+    without a team (None) alone in its own (empty: no kart has a team)."""
+    if all(team is None for team in teams):
+        return ()
+    labels = [team if team is not None else f"\0{k}" for k, team in enumerate(teams)]
+    numbers = {label: n for n, label in enumerate(dict.fromkeys(labels), start=1)}
+    return tuple(numbers[label] for label in labels)
 
 
 @runtime_checkable

@@ -11,7 +11,7 @@ from typing import Any, Protocol, cast, runtime_checkable
 
 import numpy as np
 
-from controllers.base import Action, Controller, PlanningDriver, RaceContext
+from controllers.base import Action, Controller, PlanningDriver, RaceContext, team_numbers
 from controllers.registry import agent_pace, make_agent
 from controllers.replay import Replay, ReplayRecorder, apply_plan_targets
 from sim_core import state as st
@@ -58,13 +58,6 @@ class RaceSpec:
             raise ValueError(f"need one placement for each of the {len(self.controllers)} karts")
         if self.teams is not None and len(self.teams) != len(self.controllers):
             raise ValueError(f"need one team for each of the {len(self.controllers)} karts")
-
-    def team_numbers(self) -> tuple[int, ...]:
-        """Each kart's team as a number from 1, in order of first appearance (empty: no teams)."""
-        if self.teams is None:
-            return ()
-        numbers = {team: n for n, team in enumerate(dict.fromkeys(self.teams), start=1)}
-        return tuple(numbers[team] for team in self.teams)
 
     def condition_set(self) -> ConditionSet:
         """The set this race's conditions are drawn from."""
@@ -286,7 +279,7 @@ class _Race:
             kart = world.kart_params(index, k)  # at its pace: a driver plans with the kart it has
             pace = float(world.paces[index, k])
             context = RaceContext(
-                track, kart, k, n, world.lane_change_limit, spec.seed * 1000 + k, pace, spec.team_numbers()
+                track, kart, k, n, world.lane_change_limit, spec.seed * 1000 + k, pace, team_numbers(spec.teams or ())
             )
             driver.reset(context)
         recorder = ReplayRecorder(track.name, n) if record else None

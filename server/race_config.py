@@ -7,7 +7,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from controllers.base import RaceContext
+from controllers.base import RaceContext, team_numbers
 from sim_core.conditions import RaceConditions, condition_set
 from sim_core.params import SimParams
 from sim_core.track import Track
@@ -102,13 +102,3 @@ def driver_context(config: RaceConfig, world: World, kart: int) -> RaceContext:
         team_numbers([k.team for k in config.karts]),
     )
     return context
-
-
-def team_numbers(teams: Sequence[str | None]) -> tuple[int, ...]:
-    """Each kart's team number from 1 in order of first appearance, a kart without a team alone in its own
-    (empty: no kart has a team)."""
-    if all(team is None for team in teams):
-        return ()
-    labels = [team if team is not None else f"\0{k}" for k, team in enumerate(teams)]
-    numbers = {label: n for n, label in enumerate(dict.fromkeys(labels), start=1)}
-    return tuple(numbers[label] for label in labels)

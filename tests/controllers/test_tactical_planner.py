@@ -275,21 +275,23 @@ def test_a_pass_under_way_is_kept_while_it_still_gains_on_the_line() -> None:
 
 def test_a_race_with_teams_gives_every_planner_its_karts_team_numbers() -> None:
     """From the race's team names to the game's TEAM column: each kart's PlayerState carries its team number."""
-    from controllers.base import RaceContext
+    from controllers.base import RaceContext, team_numbers
     from controllers.race import RaceSpec
     from controllers.tactical.high_level import MCTSPlanner
     from sim_core.observation import observe
     from sim_core.world import World
 
     spec = RaceSpec("oval", ("mcts-lqng",) * 4, teams=("blue", "red", "blue", "red"))
-    assert spec.team_numbers() == (1, 2, 1, 2) and RaceSpec("oval").team_numbers() == ()
+    assert team_numbers(spec.teams or ()) == (1, 2, 1, 2) and team_numbers(RaceSpec("oval").teams or ()) == ()
     with pytest.raises(ValueError, match="one team for each"):
         RaceSpec("oval", ("mcts-lqng", "e2e"), teams=("blue",))
     track = TRACKS["oval"]
     world = World(track, 1, 4)
     world.reset()
     planner = MCTSPlanner()
-    planner.reset(RaceContext(track, PAPER_KART, 0, 4, track.lane_change_limit, 0, teams=spec.team_numbers()))
+    planner.reset(
+        RaceContext(track, PAPER_KART, 0, 4, track.lane_change_limit, 0, teams=team_numbers(spec.teams or ()))
+    )
     views = observe(world)[0].karts
     players = [planner.present_state(view, 0.0, 0) for view in views]
     assert [p.team for p in players] == [1, 2, 1, 2]

@@ -264,7 +264,8 @@ def test_the_drive_client_example_runs_as_written(live: LiveServer) -> None:
 def test_a_live_team_race_gives_every_planner_its_karts_teams(client: httpx.Client) -> None:
     """Karts with a ``team`` race together: the race keeps each kart's team, and each driver's context numbers
     the teams (a kart without one alone in its own); a blank team is a 422 naming it."""
-    from server.race_config import KartEntry, RaceConfig, driver_context, team_numbers
+    from controllers.base import team_numbers
+    from server.race_config import KartEntry, RaceConfig, driver_context
     from sim_core.track_io import get_track
     from sim_core.world import World
 
