@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -60,22 +61,31 @@ class TrackerTables:
             lanes[c, : len(o)] = o
         starts, ends, deltas, tangents = track.segments
         s, (offset, offset_slope), (speed, speed_slope) = line.interpolation_tables
+        # every table a fresh writable C-contiguous float64 copy: numba compiles one kernel per argument type, and
+        # a track's cached arrays are read-only where they were computed but writable where the track was
+        # unpickled (a controller host): without the copy each such process compiled the tracker's kernels anew,
+        # mid-race, for seconds
         return cls(
             float(track.length),
-            np.asarray(track.checkpoint_s, dtype=np.float64),
-            lanes,
-            np.array(starts),
-            np.array(ends),
-            np.ascontiguousarray(deltas),
-            np.ascontiguousarray(tangents),
-            np.ascontiguousarray(track.centre_xy, dtype=np.float64),
-            line.closed_length,
-            np.array(s),
-            np.array(offset),
-            np.array(offset_slope),
-            np.array(speed),
-            np.array(speed_slope),
+            _table(track.checkpoint_s),
+            _table(lanes),
+            _table(starts),
+            _table(ends),
+            _table(deltas),
+            _table(tangents),
+            _table(track.centre_xy),
+            float(line.closed_length),
+            _table(s),
+            _table(offset),
+            _table(offset_slope),
+            _table(speed),
+            _table(speed_slope),
         )
+
+
+def _table(values: Any) -> np.ndarray:
+    """A fresh writable C-contiguous float64 copy of ``values``."""
+    return np.array(values, dtype=np.float64)
 
 
 @njit(cache=True, inline="always")

@@ -72,3 +72,24 @@ def _top_speed(agent: str) -> float:
 def test_a_kart_at_a_pace_handicap_keeps_to_its_lower_top_speed_and_uses_most_of_it() -> None:
     assert _top_speed("fixed-lqng") > 0.97 * PAPER_KART.top_speed
     assert 0.97 * 0.8 * PAPER_KART.top_speed < _top_speed("fixed-lqng@0.8") <= 0.8 * PAPER_KART.top_speed
+
+
+def test_the_tracker_tables_have_one_type_wherever_the_track_was_built() -> None:
+    """A controller host gets its track unpickled (cached arrays writable) while the process that built it has them
+    read-only: the tables must type the same in both, or numba compiles the tracker's kernels again, mid-race."""
+    import pickle
+
+    import numba
+
+    from controllers.lq.targets import TrackerTables
+    from controllers.racing_line import optimise_racing_line
+    from sim_core.track_io import get_track
+
+    track = get_track("oval")
+    line = optimise_racing_line(track, PAPER_KART)
+    _ = track.segments  # computed (read-only) before pickling, as the server's track has them
+    unpickled = pickle.loads(pickle.dumps(track))
+    assert unpickled.segments[2].flags.writeable != track.segments[2].flags.writeable  # what made them differ
+    here, there = TrackerTables.of(track, line), TrackerTables.of(unpickled, line)
+    for name in TrackerTables.__dataclass_fields__:
+        assert numba.typeof(getattr(here, name)) == numba.typeof(getattr(there, name)), name
