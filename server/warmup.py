@@ -12,10 +12,13 @@ import logging
 import time
 from collections.abc import Iterable
 
+import numpy as np
+
 from controllers.base import RaceContext
 from controllers.registry import ControllerSpec
 from server.drivers import KartDriver
 from server.race_config import KartEntry
+from sim_core.conditions import condition_set
 from sim_core.observation import Observation, observe
 from sim_core.params import SimParams
 from sim_core.track_io import get_track
@@ -50,8 +53,11 @@ def warm_drivers(specs: Iterable[ControllerSpec], *, step_world: bool = False) -
 
 
 def warm_tick_path(specs: Iterable[ControllerSpec]) -> None:
-    """The server process: the world step and sensors, and the trackers of ``specs`` (those that will run in its
-    threads; none when controller hosts run them)."""
+    """The server process: the world step and sensors, the drivers' imprecision of the ``varied`` conditions, and
+    the trackers of ``specs`` (those that will run in its threads; none when controller hosts run them)."""
+    imprecision = condition_set("varied").draw(0, 2).imprecision()
+    if imprecision is not None:
+        imprecision.perturb(np.zeros((2, 2)), np.ones(2, dtype=bool))
     warm_drivers(specs, step_world=True)
 
 
