@@ -40,7 +40,7 @@ from controllers.registry import REGISTRY
 pytestmark = pytest.mark.slow  # a thousand generated requests and more
 
 EXAMPLES_PER_OPERATION = 50  # valid and invalid each, per operation
-STATEFUL_SCENARIOS = 20  # per suite
+STATEFUL_SCENARIOS = 12  # per suite
 STATEFUL_STEPS = 8
 STATEFUL_REQUESTS = 400  # suites run (seeds 0, 1, ...) until this many requests followed links
 MAX_STATEFUL_SUITES = 8
