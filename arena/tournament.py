@@ -315,6 +315,15 @@ def run_tournament(
     return stored
 
 
+def race_stream(
+    jobs: Sequence[RaceJob], *, workers: int | None = None, record: bool = False, batch: int = BATCH_RACES
+) -> Generator[FinishedRace, None, None]:
+    """Run ``jobs`` in worker processes (chunks of :func:`chunks`), yielding each race as its chunk finishes (not in
+    schedule order): for studies that keep their races themselves (:mod:`arena.field`)."""
+    n_workers = workers or default_workers()
+    return _backend_races("process", chunks(jobs, batch, n_workers), n_workers, None, record)
+
+
 def chunks(jobs: Sequence[RaceJob], batch: int, workers: int = 1) -> list[tuple[RaceJob, ...]]:
     """``jobs`` cut into chunks of at most ``batch`` races that share a batch key (track, laps, ...:
     :func:`controllers.race.batch_key`), in schedule order; smaller chunks when there are too few races to keep

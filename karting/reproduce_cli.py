@@ -84,6 +84,30 @@ def teams(
     console.print(f"wrote {out}/")
 
 
+@app.command()
+def field(
+    races: Annotated[int, typer.Option(min=1, help="races per track (best a multiple of 5)")] = 40,
+    seed: Annotated[int, typer.Option(help="the study's seed")] = 0,
+    workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per CPU)")] = None,
+    out: Annotated[Path, typer.Option(help="the field results folder")] = Path("docs/results/field"),
+) -> None:
+    """Race the five agents in 8-kart free-for-all fields (oval, complex, brands-hatch; varied conditions) and
+    write each agent's finish rate, safety per kart-race and rating into OUT/ (README.md, field.json, manifest)."""
+    from arena.reproduce_field import field_spec, run_field, write_field
+
+    try:
+        spec = field_spec(races, seed)
+    except ValueError as exc:
+        error(str(exc))
+        raise typer.Exit(2) from None
+    console.print(f"field: {spec.total} races of {spec.field_size} karts")
+    started = time.perf_counter()
+    done = run_field(spec, workers, on_race=lambda n, total: console.print(f"{n}/{total}", end="\r"))
+    wall = time.perf_counter() - started
+    write_field(out, spec, done, wall)
+    console.print(f"wrote {out}/ ({wall / 60:.1f} min)")
+
+
 def _run_and_publish(
     store: TournamentDatabase, tid: str, spec: TournamentSpec, workers: int | None, folder: Path
 ) -> Tournament:
