@@ -1,0 +1,87 @@
+"""Free-for-all fields: the rotation puts every agent in every grid slot equally often, races of one index share
+their seed across tracks' schedules, the per-agent figures on hand-placed races, the slot wins, bad specs refused,
+and a tiny study run through worker processes and written out."""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+from pathlib import Path
+
+import pytest
+
+from arena.field import FieldSpec, field_figures, slot_wins
+from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures
+from arena.reproduce_field import run_field, write_field
+
+FIVE = ("mcts-rl", "e2e", "fixed-rl", "mcts-lqng", "fixed-lqng")
+
+
+def _kart(agent: str, time: float | None, collisions: int = 0, illegal: int = 0) -> KartFigures:
+    return KartFigures(agent, time is not None, time, collisions, {PER_STEP: illegal, CHECKPOINT: 0}, PER_STEP)
+
+
+def test_over_a_turn_of_the_rotation_each_agent_starts_from_each_slot_once() -> None:
+    spec = FieldSpec(FIVE, races_per_track=10)
+    for start in (0, 5):
+        slots = Counter((slot, agent) for r in range(start, start + 5) for slot, agent in enumerate(spec.lineup(r)))
+        assert set(slots.values()) == {1} and len(slots) == 8 * 5
+    assert spec.lineup(0) == (*FIVE, *FIVE[:3])
+    assert spec.lineup(1)[0] == "e2e"
+    assert spec.start_lanes == (2, 3, 1, 4, 2, 3, 1, 4)
+
+
+def test_the_schedule_has_every_track_and_distinct_seeds_per_race() -> None:
+    spec = FieldSpec(FIVE, tracks=("oval", "complex"), races_per_track=3, field_size=6)
+    jobs = spec.jobs()
+    assert [j.index for j in jobs] == list(range(6)) and spec.total == 6
+    assert [j.track for j in jobs] == ["oval"] * 3 + ["complex"] * 3
+    assert len({j.seed for j in jobs}) == 6
+    assert all(len(j.agents) == 6 and j.conditions == "varied" for j in jobs)
+    assert jobs == FieldSpec(FIVE, tracks=("oval", "complex"), races_per_track=3, field_size=6).jobs()
+
+
+@pytest.mark.parametrize(
+    ("change", "says"),
+    [
+        ({"agents": ("e2e",)}, "two or more"),
+        ({"agents": ("e2e", "e2e")}, "two or more"),
+        ({"field_size": 9}, "field_size"),
+        ({"field_size": 1}, "field_size"),
+        ({"races_per_track": 0}, "races_per_track"),
+    ],
+)
+def test_bad_specs_say_what_is_wrong(change: dict[str, object], says: str) -> None:
+    values: dict[str, object] = {"agents": FIVE, **change}
+    with pytest.raises(ValueError, match=says):
+        FieldSpec(**values).validate()  # type: ignore[arg-type]
+
+
+def test_per_agent_figures_and_slot_wins_on_placed_races() -> None:
+    races = [
+        RaceFigures("oval", (_kart("a", 80.0, 1), _kart("b", 79.0), _kart("a", None, 2, 1))),
+        RaceFigures("oval", (_kart("b", 81.0, 0, 2), _kart("a", 80.5), _kart("b", 82.0, 1))),
+        RaceFigures("oval", (_kart("a", None), _kart("b", None), _kart("a", None))),  # nobody finished
+    ]
+    figures = field_figures(races)
+    a, b = figures["a"], figures["b"]
+    assert (a.karts, a.finished, a.wins, a.races) == (5, 2, 1, 3)
+    assert (b.karts, b.finished, b.wins, b.races) == (4, 3, 1, 3)
+    assert a.collisions_at_fault == pytest.approx(3 / 5) and a.illegal_lane_changes == pytest.approx(1 / 5)
+    assert b.collisions_at_fault == pytest.approx(1 / 4) and b.illegal_lane_changes == pytest.approx(2 / 4)
+    assert a.finished_ci95 is not None and a.finished_ci95.low < 0.4 < a.finished_ci95.high
+    assert slot_wins(races) == [0, 2, 0]
+
+
+def test_a_tiny_study_runs_in_worker_processes_and_is_written_out(tmp_path: Path) -> None:
+    spec = FieldSpec(("lane-follower", "fixed-lqng"), ("oval",), field_size=3, races_per_track=2, time_limit=6.0)
+    races = run_field(spec.validate(), workers=2)
+    assert [len(r.karts) for r in races] == [3, 3]
+    assert [r.agents for r in races] == [spec.lineup(0), spec.lineup(1)]
+    write_field(tmp_path, spec, races, 1.0)
+    data = json.loads((tmp_path / "field.json").read_text())
+    assert set(data["tracks"]) == {"oval", "combined"} and len(data["races"]) == 2
+    assert set(data["tracks"]["oval"]["agents"]) == {"lane-follower", "fixed-lqng"}
+    assert json.loads((tmp_path / "manifest.json").read_text())["kind"] == "field"
+    readme = (tmp_path / "README.md").read_text()
+    assert "| fixed-lqng |" in readme and "Wins by grid slot" in readme
