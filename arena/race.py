@@ -175,6 +175,7 @@ def kart_figures(agent: str, kart: KartResult) -> KartFigures:
         passes=kart.passes,
         delta_r=kart.delta_r,
         delta_v=kart.delta_v,
+        contacts_with=kart.contacts_with or None,
     )
 
 

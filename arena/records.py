@@ -34,6 +34,7 @@ class KartFigures:
     passes: int | None = None  # overtakes completed and held (None: not measured by the source)
     delta_r: float | None = None  # [m] mean target-lane distance at checkpoints (None: no plan)
     delta_v: float | None = None  # [m/s] mean target-speed difference at checkpoints (None: no plan)
+    contacts_with: tuple[int, ...] | None = None  # contacts with each kart of the race, by kart (None: not recorded)
 
     @property
     def safety_score(self) -> int:

@@ -47,6 +47,11 @@ def _safety(figures: TeamFigures | None) -> str:
     return f"{figures.safety:.2f}" + ("" if ci is None else f" [{ci.low:.2f}, {ci.high:.2f}]")
 
 
+def _teammate(figures: TeamFigures | None) -> str:
+    per_race = None if figures is None else figures.teammate_contacts_per_race
+    return "-" if per_race is None else f"{per_race:.2f}"
+
+
 def _per_track(races: Sequence[RaceFigures]) -> dict[str, dict[str, TeamFigures]]:
     return {track: team_figures([r for r in races if track in (COMBINED, r.track)]) for track in (*TRACKS, COMBINED)}
 
@@ -86,8 +91,8 @@ def team_findings(tournament: Tournament, original_logs: Path | None) -> str:
             f"## {track}: each agent's team",
             "",
             "| team | wins, ours | wins, original | team points, ours | safety per kart-race, ours | "
-            "safety, original | unfinished karts, ours |",
-            "|---|---|---|---|---|---|---|",
+            "safety, original | unfinished karts, ours | team-mate contacts per race, ours |",
+            "|---|---|---|---|---|---|---|---|",
         ]
         for agent in PAPER_AGENTS:
             mine, theirs = ours[track].get(agent), original.get(track, {}).get(agent)
@@ -95,7 +100,7 @@ def team_findings(tournament: Tournament, original_logs: Path | None) -> str:
             unfinished = "-" if mine is None else str(mine.unfinished)
             lines.append(
                 f"| {agent} | {_rate(mine)} | {_rate(theirs)} | {points} | {_safety(mine)} | {_safety(theirs)} | "
-                f"{unfinished} |"
+                f"{unfinished} | {_teammate(mine)} |"
             )
         lines.append("")
     lines += [

@@ -76,11 +76,17 @@ class TeamFigures:
     safety: float  # the two together
     safety_ci95: Interval | None  # bootstrap over kart-races
     unfinished: int  # karts that did not finish
+    teammate_contacts: int | None = None  # contacts between its own karts over its races (None: not measured)
 
     @property
     def win_rate(self) -> float:
         """Share of its races won."""
         return self.wins / self.races if self.races else 0.0
+
+    @property
+    def teammate_contacts_per_race(self) -> float | None:
+        """Contacts between its own karts per race (None: not measured)."""
+        return None if self.teammate_contacts is None or not self.races else self.teammate_contacts / self.races
 
     def to_json(self) -> dict[str, object]:
         """The figures as JSON."""
@@ -102,6 +108,8 @@ class TeamFigures:
             "safety_per_kart_race": self.safety,
             "safety_ci95": interval(self.safety_ci95),
             "unfinished_karts": self.unfinished,
+            "teammate_contacts": self.teammate_contacts,
+            "teammate_contacts_per_race": self.teammate_contacts_per_race,
         }
 
 
@@ -112,8 +120,12 @@ def team_figures(races: Sequence[RaceFigures], points: Sequence[float] = ORIGINA
     safety: dict[str, list[int]] = {}
     collisions: dict[str, int] = {}
     unfinished: dict[str, int] = {}
+    teammate: dict[str, int | None] = {}
     for race in races:
         result = team_result(race, points)
+        for team, contacts in _teammate_contacts(race).items():
+            known = teammate.get(team, 0)
+            teammate[team] = None if known is None or contacts is None else known + contacts
         for team, scored in result.points.items():
             played.setdefault(team, []).append(scored)
             won[team] = won.get(team, 0) + (result.winner == team)
@@ -138,8 +150,25 @@ def team_figures(races: Sequence[RaceFigures], points: Sequence[float] = ORIGINA
             safety=total_safety / kart_races,
             safety_ci95=bootstrap_mean(safety[team]),
             unfinished=unfinished[team],
+            teammate_contacts=teammate.get(team),
         )
     return figures
+
+
+def _teammate_contacts(race: RaceFigures) -> dict[str, int | None]:
+    """Per team of ``race``: contacts between two of its karts (None where a kart's contacts were not recorded)."""
+    teams = race_teams(race)
+    found: dict[str, int | None] = dict.fromkeys(teams, 0)
+    for i, kart in enumerate(race.karts):
+        for j in range(i + 1, len(race.karts)):
+            if teams[i] != teams[j]:
+                continue
+            known = found[teams[i]]
+            if kart.contacts_with is None or known is None:
+                found[teams[i]] = None
+            else:
+                found[teams[i]] = known + kart.contacts_with[j]
+    return found
 
 
 @dataclass(frozen=True)

@@ -106,7 +106,8 @@ class KartRecord:
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> KartRecord:
         """Read back :meth:`to_json` of this or an older version."""
-        referee = KartResult(**{f.name: data.get(record_name(f.name), _default(f)) for f in fields(KartResult)})
+        values = {f.name: data.get(record_name(f.name), _default(f)) for f in fields(KartResult)}
+        referee = KartResult(**{**values, "contacts_with": tuple(values["contacts_with"])})
         return cls(
             int(data["index"]),
             str(data["name"]),

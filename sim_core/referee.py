@@ -59,6 +59,7 @@ from sim_core.state import (
     LANE_COUNTING_CHECKPOINT,
     PAIR_BUFFER,
     PAIR_CONTACT,
+    PAIR_CONTACT_UNIT,
     PAIR_I_AHEAD,
     PAIR_ORDER_KNOWN,
     PASS_HOLD_STEPS,
@@ -244,6 +245,7 @@ def judge_contacts(
                     I[b, j, I_CONTACTS] += 1
                     I[b, i, I_EVENTS] |= EV_CONTACT
                     I[b, j, I_EVENTS] |= EV_CONTACT
+                    flags += PAIR_CONTACT_UNIT
                 flags = (flags | PAIR_CONTACT) if touching else (flags & ~PAIR_CONTACT)
             violating = False
             if not I[b, i, I_FINISHED] and not I[b, j, I_FINISHED]:

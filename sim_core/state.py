@@ -99,6 +99,10 @@ PAIR_BUFFER = 1  # the nose-side kart is inside its buffer
 PAIR_CONTACT = 2  # the two bodies touch
 PAIR_ORDER_KNOWN = 4  # (i < j) the running order of i and j has been established
 PAIR_I_AHEAD = 8  # (i < j) i runs ahead of j
+# (i < j) the pair's contacts so far, counted in the flag word's high bits (one unit per new contact): who touched
+# whom, so that a team's karts' contacts with each other can be reported apart
+PAIR_CONTACT_SHIFT = 32
+PAIR_CONTACT_UNIT = 1 << PAIR_CONTACT_SHIFT
 
 PASS_HOLD_STEPS = 100  # a pass counts once the passer has held the place this long (2 s)
 PASS_CHECK_STEPS = 5  # the running order is checked every this many steps (10 Hz)

@@ -50,6 +50,7 @@ class KartResult:
     illegal_lane_changes_per_step: int = 0
     illegal_lane_changes_checkpoint: int = 0
     passes: int = 0  # overtakes completed and held for 2 s (or to the finish)
+    contacts_with: tuple[int, ...] = ()  # its contacts with each kart of the race, by kart (0 with itself)
 
 
 @dataclass(frozen=True)
@@ -383,6 +384,8 @@ class World:
         n = self.track.n_checkpoints
         order = self.standings(race)
         karts = []
+        pair_contacts = self.pair_flags[race] >> st.PAIR_CONTACT_SHIFT  # counted in (i < j) only
+        pair_contacts = pair_contacts + pair_contacts.T
         for k in range(self.n_karts):
             f = self.fstate[race, k]
             i = self.istate[race, k]
@@ -408,6 +411,7 @@ class World:
                     illegal_lane_changes_per_step=int(i[st.I_ILLEGAL_STEP]),
                     illegal_lane_changes_checkpoint=int(i[st.I_ILLEGAL_CHECKPOINT]),
                     passes=int(i[st.I_PASSES]),
+                    contacts_with=tuple(int(c) for c in pair_contacts[k]),
                 )
             )
         winner = race_winner([kr.finish_time for kr in karts])

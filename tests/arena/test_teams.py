@@ -69,3 +69,20 @@ def test_team_figures_count_wins_points_safety_and_unfinished_karts_per_kart_rac
     assert a.kart_races == 4 and a.collisions == pytest.approx(0.25) and a.illegal_lane_changes == pytest.approx(0.5)
     assert a.safety == pytest.approx(0.75) and (a.unfinished, b.unfinished) == (0, 1)
     assert a.wins_ci95 is not None and a.wins_ci95.contains(0.5)
+
+
+def test_teammate_contacts_are_counted_apart_and_unknown_where_not_recorded() -> None:
+    """Karts 0 and 1 are team a, 2 and 3 team b: a's karts touched each other twice, b's once, and a touched b
+    three times (not a team-mate contact). A race without contact records makes the count unknown."""
+
+    def kart(team: str, time: float, contacts: tuple[int, ...] | None) -> KartFigures:
+        return KartFigures(team, True, time, 0, {CHECKPOINT: 0}, CHECKPOINT, contacts_with=contacts)
+
+    contacts = ((0, 2, 3, 0), (2, 0, 0, 0), (3, 0, 0, 1), (0, 0, 1, 0))
+    karts = tuple(kart(t, 80.0 + i, c) for i, (t, c) in enumerate(zip("aabb", contacts, strict=True)))
+    race = RaceFigures("oval", karts, teams=("a", "a", "b", "b"))
+    figures = team_figures([race, race])
+    assert figures["a"].teammate_contacts == 4 and figures["a"].teammate_contacts_per_race == 2.0
+    assert figures["b"].teammate_contacts == 2 and figures["b"].to_json()["teammate_contacts_per_race"] == 1.0
+    unrecorded = RaceFigures("oval", tuple(kart(t, 80.0 + i, None) for i, t in enumerate("aabb")), teams=race.teams)
+    assert team_figures([race, unrecorded])["a"].teammate_contacts is None

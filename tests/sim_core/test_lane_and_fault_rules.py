@@ -181,3 +181,23 @@ def test_a_follower_is_at_fault_even_when_the_leader_drifts_across_its_nose() ->
             break
     assert world.istate[0, 0, st.I_CONTACTS] == 1
     assert list(world.istate[0, :, st.I_FAULTS]) == [1, 0]
+
+
+def test_the_result_says_who_touched_whom() -> None:
+    """Three karts: kart 2 runs into kart 0 from behind, kart 1 is far ahead and touches nobody. Each kart's
+    ``contacts_with`` counts its contacts with each other kart, the same on both sides (team-mate contacts are
+    reported apart from these)."""
+    track = get_track("oval")
+    world = World(track, 1, 3, sensors=False)
+    base = float(track.checkpoint_s[11])
+    world.place_kart(0, 2, base, 1.25, speed=10.0)  # the follower
+    world.place_kart(0, 0, base + 3.0, 1.25, speed=4.0)
+    world.place_kart(0, 1, base + 40.0, -1.25, speed=4.0)
+    for _ in range(100):
+        world.step(np.zeros((1, 3, 2)))
+        if world.istate[0, 0, st.I_CONTACTS]:
+            break
+    karts = world.result(0).karts
+    assert [k.contacts_with for k in karts] == [(0, 0, 1), (0, 0, 0), (1, 0, 0)]
+    assert [k.contacts for k in karts] == [1, 0, 1]
+    assert [k.collisions_at_fault for k in karts] == [0, 0, 1]
