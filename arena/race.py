@@ -176,6 +176,7 @@ def kart_figures(agent: str, kart: KartResult) -> KartFigures:
         delta_r=kart.delta_r,
         delta_v=kart.delta_v,
         contacts_with=kart.contacts_with or None,
+        passes_of=kart.passes_of or None,
     )
 
 

@@ -35,6 +35,7 @@ class KartFigures:
     delta_r: float | None = None  # [m] mean target-lane distance at checkpoints (None: no plan)
     delta_v: float | None = None  # [m/s] mean target-speed difference at checkpoints (None: no plan)
     contacts_with: tuple[int, ...] | None = None  # contacts with each kart of the race, by kart (None: not recorded)
+    passes_of: tuple[int, ...] | None = None  # passes of each kart of the race, by kart (None: not recorded)
 
     @property
     def safety_score(self) -> int:

@@ -52,6 +52,12 @@ def _teammate(figures: TeamFigures | None) -> str:
     return "-" if per_race is None else f"{per_race:.2f}"
 
 
+def _teammate_passes(figures: TeamFigures | None) -> str:
+    if figures is None or figures.races_with_teammate_pass is None:
+        return "-"
+    return rate_text(figures.races_with_teammate_pass, figures.races)
+
+
 def _per_track(races: Sequence[RaceFigures]) -> dict[str, dict[str, TeamFigures]]:
     return {track: team_figures([r for r in races if track in (COMBINED, r.track)]) for track in (*TRACKS, COMBINED)}
 
@@ -82,6 +88,10 @@ def team_findings(tournament: Tournament, original_logs: Path | None) -> str:
         "The agents plan for their team (the tactical game's team objective); the RL agents were trained for one "
         "opponent and observe the nearest karts. 95% intervals: Wilson for win rates, bootstrap for means.",
         "",
+        "Cooperation: contacts between a team's own karts per race, and the races in which one of its karts "
+        "passed the other (the referee's passes: a place taken and held for 2 s), a team-mate let by or a faster "
+        "team-mate through. Holding a rival back for a team-mate is not measured.",
+        "",
         f"The original's figures: {source}. Its grid gave the front row a checkpoint's head start, so its win "
         "rates are not comparable one for one.",
         "",
@@ -91,8 +101,9 @@ def team_findings(tournament: Tournament, original_logs: Path | None) -> str:
             f"## {track}: each agent's team",
             "",
             "| team | wins, ours | wins, original | team points, ours | safety per kart-race, ours | "
-            "safety, original | unfinished karts, ours | team-mate contacts per race, ours |",
-            "|---|---|---|---|---|---|---|---|",
+            "safety, original | unfinished karts, ours | team-mate contacts per race, ours | "
+            "races with a pass between team-mates, ours |",
+            "|---|---|---|---|---|---|---|---|---|",
         ]
         for agent in PAPER_AGENTS:
             mine, theirs = ours[track].get(agent), original.get(track, {}).get(agent)
@@ -100,7 +111,7 @@ def team_findings(tournament: Tournament, original_logs: Path | None) -> str:
             unfinished = "-" if mine is None else str(mine.unfinished)
             lines.append(
                 f"| {agent} | {_rate(mine)} | {_rate(theirs)} | {points} | {_safety(mine)} | {_safety(theirs)} | "
-                f"{unfinished} | {_teammate(mine)} |"
+                f"{unfinished} | {_teammate(mine)} | {_teammate_passes(mine)} |"
             )
         lines.append("")
     lines += [

@@ -77,6 +77,8 @@ class TeamFigures:
     safety_ci95: Interval | None  # bootstrap over kart-races
     unfinished: int  # karts that did not finish
     teammate_contacts: int | None = None  # contacts between its own karts over its races (None: not measured)
+    teammate_passes: int | None = None  # passes of one of its karts by another over its races (None: not measured)
+    races_with_teammate_pass: int | None = None  # races in which one of its karts let another by
 
     @property
     def win_rate(self) -> float:
@@ -87,6 +89,12 @@ class TeamFigures:
     def teammate_contacts_per_race(self) -> float | None:
         """Contacts between its own karts per race (None: not measured)."""
         return None if self.teammate_contacts is None or not self.races else self.teammate_contacts / self.races
+
+    @property
+    def teammate_pass_share(self) -> float | None:
+        """The share of its races in which one of its karts passed another (None: not measured)."""
+        known = self.races_with_teammate_pass
+        return None if known is None or not self.races else known / self.races
 
     def to_json(self) -> dict[str, object]:
         """The figures as JSON."""
@@ -110,6 +118,9 @@ class TeamFigures:
             "unfinished_karts": self.unfinished,
             "teammate_contacts": self.teammate_contacts,
             "teammate_contacts_per_race": self.teammate_contacts_per_race,
+            "teammate_passes": self.teammate_passes,
+            "races_with_teammate_pass": self.races_with_teammate_pass,
+            "teammate_pass_share": self.teammate_pass_share,
         }
 
 
@@ -121,11 +132,15 @@ def team_figures(races: Sequence[RaceFigures], points: Sequence[float] = ORIGINA
     collisions: dict[str, int] = {}
     unfinished: dict[str, int] = {}
     teammate: dict[str, int | None] = {}
+    passing: dict[str, int | None] = {}
+    passing_races: dict[str, int | None] = {}
     for race in races:
         result = team_result(race, points)
-        for team, contacts in _teammate_contacts(race).items():
-            known = teammate.get(team, 0)
-            teammate[team] = None if known is None or contacts is None else known + contacts
+        for team, contacts in _between_teammates(race, "contacts_with").items():
+            teammate[team] = _add(teammate.get(team, 0), contacts)
+        for team, passes in _between_teammates(race, "passes_of", both_ways=True).items():
+            passing[team] = _add(passing.get(team, 0), passes)
+            passing_races[team] = _add(passing_races.get(team, 0), None if passes is None else int(passes > 0))
         for team, scored in result.points.items():
             played.setdefault(team, []).append(scored)
             won[team] = won.get(team, 0) + (result.winner == team)
@@ -151,23 +166,27 @@ def team_figures(races: Sequence[RaceFigures], points: Sequence[float] = ORIGINA
             safety_ci95=bootstrap_mean(safety[team]),
             unfinished=unfinished[team],
             teammate_contacts=teammate.get(team),
+            teammate_passes=passing.get(team),
+            races_with_teammate_pass=passing_races.get(team),
         )
     return figures
 
 
-def _teammate_contacts(race: RaceFigures) -> dict[str, int | None]:
-    """Per team of ``race``: contacts between two of its karts (None where a kart's contacts were not recorded)."""
+def _add(total: int | None, more: int | None) -> int | None:
+    return None if total is None or more is None else total + more
+
+
+def _between_teammates(race: RaceFigures, counts: str, both_ways: bool = False) -> dict[str, int | None]:
+    """Per team of ``race``: the sum of its karts' per-kart ``counts`` (a :class:`KartFigures` field, by kart) over
+    pairs of its karts, each pair once (``both_ways``: i's count of j and j's of i); None where not recorded."""
     teams = race_teams(race)
     found: dict[str, int | None] = dict.fromkeys(teams, 0)
     for i, kart in enumerate(race.karts):
-        for j in range(i + 1, len(race.karts)):
-            if teams[i] != teams[j]:
+        for j in range(len(race.karts)):
+            if teams[i] != teams[j] or j == i or (j < i and not both_ways):
                 continue
-            known = found[teams[i]]
-            if kart.contacts_with is None or known is None:
-                found[teams[i]] = None
-            else:
-                found[teams[i]] = known + kart.contacts_with[j]
+            by_kart = getattr(kart, counts)
+            found[teams[i]] = _add(found[teams[i]], None if by_kart is None else by_kart[j])
     return found
 
 

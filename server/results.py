@@ -107,7 +107,8 @@ class KartRecord:
     def from_json(cls, data: Mapping[str, Any]) -> KartRecord:
         """Read back :meth:`to_json` of this or an older version."""
         values = {f.name: data.get(record_name(f.name), _default(f)) for f in fields(KartResult)}
-        referee = KartResult(**{**values, "contacts_with": tuple(values["contacts_with"])})
+        pairs = {name: tuple(values[name]) for name in ("contacts_with", "passes_of")}
+        referee = KartResult(**{**values, **pairs})
         return cls(
             int(data["index"]),
             str(data["name"]),

@@ -59,9 +59,13 @@ from sim_core.state import (
     LANE_COUNTING_CHECKPOINT,
     PAIR_BUFFER,
     PAIR_CONTACT,
-    PAIR_CONTACT_UNIT,
+    PAIR_CONTACT_BITS,
+    PAIR_CONTACT_SHIFT,
     PAIR_I_AHEAD,
     PAIR_ORDER_KNOWN,
+    PAIR_PASS_BITS,
+    PAIR_PASS_I_SHIFT,
+    PAIR_PASS_J_SHIFT,
     PASS_HOLD_STEPS,
     PASS_MARGIN,
     R_DONE,
@@ -245,7 +249,7 @@ def judge_contacts(
                     I[b, j, I_CONTACTS] += 1
                     I[b, i, I_EVENTS] |= EV_CONTACT
                     I[b, j, I_EVENTS] |= EV_CONTACT
-                    flags += PAIR_CONTACT_UNIT
+                    flags = add_pair_count(flags, PAIR_CONTACT_SHIFT, PAIR_CONTACT_BITS)
                 flags = (flags | PAIR_CONTACT) if touching else (flags & ~PAIR_CONTACT)
             violating = False
             if not I[b, i, I_FINISHED] and not I[b, j, I_FINISHED]:
@@ -271,6 +275,19 @@ def judge_contacts(
                 I[b, i, I_BUFFER_VIOLATIONS] += 1
             flags = (flags | PAIR_BUFFER) if violating else (flags & ~PAIR_BUFFER)
             pair_flags[b, i, j] = flags
+
+
+@njit(cache=True, inline="always")
+def add_pair_count(flags: int, shift: int, bits: int) -> int:
+    """``flags`` with the count in its ``bits`` bits from ``shift`` one higher (unless it is full)."""
+    if (flags >> shift) & ((1 << bits) - 1) < (1 << bits) - 1:
+        flags += 1 << shift
+    return flags
+
+
+def pair_count(flags: np.ndarray, shift: int, bits: int) -> np.ndarray:
+    """The counts in ``bits`` bits from ``shift`` of pair flag words ``flags`` (any shape)."""
+    return (flags >> shift) & ((1 << bits) - 1)
 
 
 @njit(**PHASE)
@@ -318,6 +335,8 @@ def count_passes(b: int, w: WorldArrays, tr: TrackArrays, step: int, scratch: St
                 if start > 0 and (step + 1 - start >= PASS_HOLD_STEPS or I[b, a, I_FINISHED]):
                     I[b, a, I_PASSES] += 1
                     w.pass_start[b, a, o] = 0
+                    shift = PAIR_PASS_I_SHIFT if a < o else PAIR_PASS_J_SHIFT
+                    flags_all[b, i, j] = add_pair_count(flags_all[b, i, j], shift, PAIR_PASS_BITS)
 
 
 @njit(**PHASE)

@@ -99,10 +99,14 @@ PAIR_BUFFER = 1  # the nose-side kart is inside its buffer
 PAIR_CONTACT = 2  # the two bodies touch
 PAIR_ORDER_KNOWN = 4  # (i < j) the running order of i and j has been established
 PAIR_I_AHEAD = 8  # (i < j) i runs ahead of j
-# (i < j) the pair's contacts so far, counted in the flag word's high bits (one unit per new contact): who touched
-# whom, so that a team's karts' contacts with each other can be reported apart
-PAIR_CONTACT_SHIFT = 32
-PAIR_CONTACT_UNIT = 1 << PAIR_CONTACT_SHIFT
+# (i < j) counts kept in the flag word's high bits: who touched whom and who passed whom, so that a team's
+# contacts between its own karts and its karts letting each other by can be reported apart. Each count saturates
+# at its field's largest value (:func:`sim_core.referee.add_pair_count`).
+PAIR_CONTACT_SHIFT = 32  # the pair's contacts (12 bits)
+PAIR_CONTACT_BITS = 12
+PAIR_PASS_I_SHIFT = 44  # passes of j by i (9 bits)
+PAIR_PASS_J_SHIFT = 53  # passes of i by j (9 bits)
+PAIR_PASS_BITS = 9
 
 PASS_HOLD_STEPS = 100  # a pass counts once the passer has held the place this long (2 s)
 PASS_CHECK_STEPS = 5  # the running order is checked every this many steps (10 Hz)

@@ -15,6 +15,7 @@ import numpy as np
 from sim_core import state as st
 from sim_core.kernel_arrays import scratch_sizes
 from sim_core.params import DT, KartParams, SimParams
+from sim_core.referee import pair_count
 from sim_core.rules import race_winner, safety_score
 from sim_core.sensors import prepare_rays, sense_batch
 from sim_core.step import step_batch
@@ -51,6 +52,7 @@ class KartResult:
     illegal_lane_changes_checkpoint: int = 0
     passes: int = 0  # overtakes completed and held for 2 s (or to the finish)
     contacts_with: tuple[int, ...] = ()  # its contacts with each kart of the race, by kart (0 with itself)
+    passes_of: tuple[int, ...] = ()  # its passes of each kart of the race, by kart (0 of itself)
 
 
 @dataclass(frozen=True)
@@ -384,8 +386,12 @@ class World:
         n = self.track.n_checkpoints
         order = self.standings(race)
         karts = []
-        pair_contacts = self.pair_flags[race] >> st.PAIR_CONTACT_SHIFT  # counted in (i < j) only
+        flags = np.triu(self.pair_flags[race], 1)  # the counts are kept for i < j
+        pair_contacts = pair_count(flags, st.PAIR_CONTACT_SHIFT, st.PAIR_CONTACT_BITS)
         pair_contacts = pair_contacts + pair_contacts.T
+        # passes_of[i, j]: i's passes of j (i < j in the I field, j < i in the J field of the pair's word)
+        passes_of = pair_count(flags, st.PAIR_PASS_I_SHIFT, st.PAIR_PASS_BITS)
+        passes_of = passes_of + pair_count(flags, st.PAIR_PASS_J_SHIFT, st.PAIR_PASS_BITS).T
         for k in range(self.n_karts):
             f = self.fstate[race, k]
             i = self.istate[race, k]
@@ -412,6 +418,7 @@ class World:
                     illegal_lane_changes_checkpoint=int(i[st.I_ILLEGAL_CHECKPOINT]),
                     passes=int(i[st.I_PASSES]),
                     contacts_with=tuple(int(c) for c in pair_contacts[k]),
+                    passes_of=tuple(int(c) for c in passes_of[k]),
                 )
             )
         winner = race_winner([kr.finish_time for kr in karts])

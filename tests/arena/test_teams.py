@@ -86,3 +86,20 @@ def test_teammate_contacts_are_counted_apart_and_unknown_where_not_recorded() ->
     assert figures["b"].teammate_contacts == 2 and figures["b"].to_json()["teammate_contacts_per_race"] == 1.0
     unrecorded = RaceFigures("oval", tuple(kart(t, 80.0 + i, None) for i, t in enumerate("aabb")), teams=race.teams)
     assert team_figures([race, unrecorded])["a"].teammate_contacts is None
+
+
+def test_passes_between_teammates_count_both_ways_and_say_in_how_many_races() -> None:
+    """a's kart 1 passed its team-mate kart 0 once and was passed back once; b's karts never passed each other,
+    and a's kart 0 passed b's kart 2 (not between team-mates)."""
+
+    def kart(team: str, time: float, passes: tuple[int, ...]) -> KartFigures:
+        return KartFigures(team, True, time, 0, {CHECKPOINT: 0}, CHECKPOINT, passes_of=passes)
+
+    passes = ((0, 1, 1, 0), (1, 0, 0, 0), (0, 0, 0, 0), (0, 0, 0, 0))
+    karts = tuple(kart(t, 80.0 + i, p) for i, (t, p) in enumerate(zip("aabb", passes, strict=True)))
+    busy = RaceFigures("oval", karts, teams=tuple("aabb"))
+    quiet = RaceFigures("oval", tuple(kart(t, 80.0 + i, (0,) * 4) for i, t in enumerate("aabb")), teams=tuple("aabb"))
+    figures = team_figures([busy, quiet])
+    assert (figures["a"].teammate_passes, figures["a"].races_with_teammate_pass) == (2, 1)
+    assert figures["a"].teammate_pass_share == 0.5
+    assert (figures["b"].teammate_passes, figures["b"].teammate_pass_share) == (0, 0.0)

@@ -39,6 +39,7 @@ def test_an_overtake_held_for_two_seconds_is_a_pass() -> None:
     hold(world, (12.0, 8.0), 110)  # 2 s on, give or take the 0.1 s between checks of the running order
     assert world.istate[0, :, st.I_PASSES].tolist() == [1, 0]
     assert world.result(0).karts[0].passes == 1
+    assert [k.passes_of for k in world.result(0).karts] == [(0, 1), (0, 0)]  # kart 0 passed kart 1
 
 
 def test_a_place_lost_back_within_two_seconds_is_no_pass() -> None:
@@ -48,9 +49,24 @@ def test_a_place_lost_back_within_two_seconds_is_no_pass() -> None:
     assert world.istate[0, :, st.I_PASSES].tolist() == [0, 0]
     hold(world, (3.0, 10.0), 150)  # kart 1 took its place back and held it: that one is a pass
     assert world.istate[0, :, st.I_PASSES].tolist() == [0, 1]
+    assert [k.passes_of for k in world.result(0).karts] == [(0, 0), (1, 0)]  # kart 1 passed kart 0
 
 
 def test_the_starting_order_is_not_a_pass() -> None:
     world = World(get_track("oval"), 1, 2, sensors=False)
     hold(world, (10.0, 6.0), 300)  # side by side on the grid: kart 0 simply pulls away
     assert world.istate[0, :, st.I_PASSES].tolist() == [0, 0]
+
+
+def test_a_pair_count_stops_at_its_fields_largest_value_and_leaves_the_others_alone() -> None:
+    from sim_core.referee import add_pair_count, pair_count
+
+    flags = st.PAIR_CONTACT | st.PAIR_ORDER_KNOWN
+    for _ in range(600):
+        flags = add_pair_count(flags, st.PAIR_PASS_I_SHIFT, st.PAIR_PASS_BITS)
+    flags = add_pair_count(flags, st.PAIR_CONTACT_SHIFT, st.PAIR_CONTACT_BITS)
+    words = np.array([flags])
+    assert pair_count(words, st.PAIR_PASS_I_SHIFT, st.PAIR_PASS_BITS).tolist() == [2**st.PAIR_PASS_BITS - 1]
+    assert pair_count(words, st.PAIR_PASS_J_SHIFT, st.PAIR_PASS_BITS).tolist() == [0]
+    assert pair_count(words, st.PAIR_CONTACT_SHIFT, st.PAIR_CONTACT_BITS).tolist() == [1]
+    assert flags & 0xFF == st.PAIR_CONTACT | st.PAIR_ORDER_KNOWN and flags > 0
