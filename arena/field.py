@@ -24,10 +24,9 @@ from arena.tournament import race_seed
 from controllers.race import load_any_track
 from controllers.registry import validate_agent
 from sim_core.conditions import condition_set
-from sim_core.world import MAX_KARTS
+from sim_core.world import DEFAULT_START_LANES, MAX_KARTS, grid_lanes
 
 FIELD_TRACKS = ("oval", "complex", "brands-hatch")
-ROW_LANES = (2, 3, 1, 4)  # the grid's lanes in each row, pole first (as the world's default grid)
 
 
 @dataclass(frozen=True)
@@ -56,8 +55,8 @@ class FieldSpec:
             raise ValueError(f"races_per_track must be >= 1, got {self.races_per_track}")
         condition_set(self.conditions)
         for track in self.tracks:
-            if load_any_track(track).n_lanes < len(ROW_LANES):
-                raise ValueError(f"track {track!r} has fewer than {len(ROW_LANES)} lanes for the grid")
+            if load_any_track(track).n_lanes < max(DEFAULT_START_LANES):
+                raise ValueError(f"track {track!r} has fewer than {max(DEFAULT_START_LANES)} lanes for the grid")
         return self
 
     def lineup(self, race: int) -> tuple[str, ...]:
@@ -67,8 +66,8 @@ class FieldSpec:
 
     @property
     def start_lanes(self) -> tuple[int, ...]:
-        """Each slot's lane: :data:`ROW_LANES` in the front row, again in the second."""
-        return tuple(ROW_LANES[slot % len(ROW_LANES)] for slot in range(self.field_size))
+        """Each slot's lane: the world's default grid (lanes 2, 3, 1, 4 in each row)."""
+        return grid_lanes(self.field_size)
 
     @property
     def total(self) -> int:
@@ -134,10 +133,7 @@ def field_figures(races: Sequence[RaceFigures]) -> dict[str, FieldFigures]:
     for agent in sorted({a for race in races for a in race.agents}):
         karts = [k for race in races for k in race.karts if k.agent == agent]
         entered = [race for race in races if agent in race.agents]
-        wins = 0
-        for race in entered:
-            winner = winner_index(race.karts)
-            wins += winner is not None and race.karts[winner].agent == agent
+        wins = sum(race.winner() == agent for race in entered)
         finished = sum(k.finished for k in karts)
         collisions = [float(k.collisions_at_fault) for k in karts]
         illegal = [float(k.illegal_lane_changes[PER_STEP]) for k in karts]
