@@ -30,7 +30,7 @@ import viser
 from sim_core.track import Track
 from web.frame import KartFrame, RaceFrame
 from web.hud import legend_text
-from web.meshes import add_track
+from web.meshes import add_lighting, add_track
 from web.race_nodes import HUD_ORDER, RaceNodes, _PoseWriter
 from web.race_nodes import WAYPOINT_POOL as WAYPOINT_POOL
 
@@ -195,7 +195,7 @@ class RaceScene:
     def _build(self, shared: bool) -> None:
         server = self.server
         server.gui.configure_theme(show_share_button=False, control_layout="floating", control_width="large")
-        server.scene.configure_environment_map("warehouse", environment_intensity=0.45)
+        add_lighting(server)
         server.scene.set_up_direction("+z")
         add_track(server, self.track)
         if shared:

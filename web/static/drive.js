@@ -152,7 +152,7 @@ function viewShowsKart(frame) {
   try { mutable = frame.contentWindow && frame.contentWindow.__viserMutable; } catch (_) { return false; }
   if (!mutable || !mutable.nodeRefFromName) return false;
   const shown = mutable.nodeRefFromName[`/karts/kart${kartIndex}`];
-  const canvas = mutable.canvas; // nearly transparent until the scene's environment map is ready
+  const canvas = mutable.canvas; // viser keeps it nearly transparent while an environment map loads
   return Boolean(shown) && (!canvas || ["", "1"].includes(canvas.style.opacity));
 }
 
