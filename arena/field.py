@@ -3,8 +3,9 @@
 A field race puts ``field_size`` karts on the world's two-row grid (lanes 2, 3, 1, 4 in each row, the second row
 behind the first): the agents in turn, slot by slot, from a different first agent each race
 (:meth:`FieldSpec.lineup`), so over every ``len(agents)`` consecutive races each agent starts from each slot once.
-A slot in the front row is a head start over one in the second (the karts drive the same laps from further
-back); the rotation spreads it evenly over the agents, and :func:`slot_wins` reports how much it decides.
+Under the default ``varied-equal-distance`` conditions every kart finishes after the race's laps from its own
+slot, so no slot is nearer the flag; a slot in front is still a place in front on the road, which the rotation
+spreads evenly over the agents, and :func:`slot_wins` reports how much it decides.
 
 Per agent, over every kart it raced (:class:`FieldFigures`): the share of karts that finished (a Wilson
 interval), collisions at fault and illegal lane changes per kart-race (bootstrap intervals), and its rating from
@@ -39,7 +40,7 @@ class FieldSpec:
     field_size: int = MAX_KARTS
     races_per_track: int = 40
     seed: int = 0
-    conditions: str = "varied"
+    conditions: str = "varied-equal-distance"
     laps: int | None = None  # None: each track's
     time_limit: float | None = None  # [s] None: the rules' limit
 

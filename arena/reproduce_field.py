@@ -1,5 +1,6 @@
 """The free-for-all field study (``karting reproduce field``): the paper's five agents in 8-kart races on ``oval``,
-``complex`` and the imported ``brands-hatch`` under ``varied`` conditions (:mod:`arena.field`), written into
+``complex`` and the imported ``brands-hatch`` under ``varied-equal-distance`` conditions (:mod:`arena.field`: every
+kart finishes after the same distance from its own slot), written into
 ``OUT/``: ``README.md`` (per track: each agent's finish rate, collisions at fault and illegal lane changes per
 kart-race against the field targets, the ratings from the finishing orders, the wins by grid slot),
 ``field.json`` (every figure and every kart of every race) and ``manifest.json``.
@@ -135,7 +136,7 @@ def _slot_section(races: Sequence[RaceFigures], size: int) -> list[str]:
         "",
         f"The front row (slots 1-4) won {front} of {decided} decided races "
         f"({100 * front / max(decided, 1):.0f}%; half of the slots). The rotation gives every agent each slot "
-        "equally often, so the head start does not favour an agent; it does decide races.",
+        "equally often, so a place in front does not favour an agent; what it decides is this share.",
         "",
     ]
 

@@ -264,9 +264,12 @@ class _Race:
             wear=conditions.start_wear,
             start_offsets=conditions.start_offsets,
             paces=spec.kart_paces(conditions),
+            finish=conditions.finish,
         )
         if spec.placements is not None:
             _place(world, index, spec.placements, conditions.start_wear)
+            if conditions.finish == "equal_distance":
+                world.finish_equal_distance(index)  # from the placed karts' spots
         if drivers is None:
             drivers = [make_agent(name) for name in spec.controllers]
         elif len(drivers) != n:

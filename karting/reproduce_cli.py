@@ -91,8 +91,9 @@ def field(
     workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per CPU)")] = None,
     out: Annotated[Path, typer.Option(help="the field results folder")] = Path("docs/results/field"),
 ) -> None:
-    """Race the five agents in 8-kart free-for-all fields (oval, complex, brands-hatch; varied conditions) and
-    write each agent's finish rate, safety per kart-race and rating into OUT/ (README.md, field.json, manifest)."""
+    """Race the five agents in 8-kart free-for-all fields (oval, complex, brands-hatch; varied conditions, each
+    kart finishing after the same distance from its slot) and write each agent's finish rate, safety per
+    kart-race and rating into OUT/ (README.md, field.json, manifest)."""
     from arena.reproduce_field import field_spec, run_field, write_field
 
     try:

@@ -144,8 +144,9 @@ class RaceIn(BaseModel):
     conditions: ConditionName = Field(
         "paper",
         description="race conditions drawn from the seed: paper (every kart launches at once, no imprecision), "
-        "varied (launch reactions within 0.25 s, start wear, the AI drivers' small imprecision) or varied-pace "
-        "(varied, and each AI kart's pace within 2% of the kart's)",
+        "varied (launch reactions within 0.25 s, start wear, the AI drivers' small imprecision), varied-pace "
+        "(varied, and each AI kart's pace within 2% of the kart's) or varied-equal-distance (varied, and every kart "
+        "finishes after the same distance from its own grid slot)",
     )
     karts: list[KartIn] = Field(min_length=MIN_KARTS, max_length=MAX_KARTS)
 

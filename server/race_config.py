@@ -85,7 +85,13 @@ def build_world(config: RaceConfig, params: SimParams, drawn: RaceConditions, hu
     (a human's too), an AI kart's times the pace the conditions drew."""
     world = World(config.track, 1, len(config.karts), params, laps=config.laps)
     paces = [k.pace * (1.0 if human else drawn.paces[k.index]) for k, human in zip(config.karts, humans, strict=True)]
-    world.reset(start_lanes=config.start_lanes, wear=drawn.start_wear, start_offsets=drawn.start_offsets, paces=paces)
+    world.reset(
+        start_lanes=config.start_lanes,
+        wear=drawn.start_wear,
+        start_offsets=drawn.start_offsets,
+        paces=paces,
+        finish=drawn.finish,
+    )
     return world
 
 

@@ -9,6 +9,9 @@ turns a seed into one race's :class:`RaceConditions`:
 * **grid**: side by side in the front row (the paper's), or ``staggered``: each kart ``stagger`` m behind the one
   before it in grid order (the order of :data:`sim_core.world.DEFAULT_START_LANES`: lane 2 on pole), as real
   karting grids stand; which kart starts in which lane is the race's (a tournament alternates them);
+* **finish**: at the line on the last lap (the paper's), or ``equal_distance``: every kart after the race's laps
+  from its own slot, so that no slot of a grid of several rows is a head start
+  (:meth:`sim_core.world.World.finish_equal_distance`);
 * **tyre wear at the start**, per kart, uniform in ``wear_range`` (the lateral grip falls with wear,
   :func:`sim_core.kart.lateral_limit`);
 * **pace**, per kart, uniform in ``pace_range``: the kart drives as the reference kart at that pace
@@ -31,6 +34,7 @@ import numpy as np
 from numba import njit
 
 from sim_core.params import DT, MIN_PACE, RuleParams
+from sim_core.world import FINISH_RULES, FinishRule
 
 GridLayout = Literal["side_by_side", "staggered"]
 GRID_LAYOUTS: tuple[GridLayout, ...] = ("side_by_side", "staggered")
@@ -54,6 +58,7 @@ class RaceConditions:
     noise_time: float  # [s] correlation time of the noise
     noise_seed: int  # seeds the noise's stream (:class:`Imprecision`)
     paces: tuple[float, ...] = ()  # [-] per kart (empty: every kart at the reference pace, 1)
+    finish: FinishRule = "line"  # where each kart finishes (World.reset)
 
     def __post_init__(self) -> None:
         if not self.paces:
@@ -102,6 +107,7 @@ class ConditionSet:
     throttle_noise: float = 0.0  # standard deviation, of full throttle
     noise_time: float = 0.3  # [s] correlation time
     pace_range: tuple[float, float] = (1.0, 1.0)  # [-] each kart's pace uniform in this range
+    finish: FinishRule = "line"  # where each kart finishes (World.reset)
     description: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -129,6 +135,8 @@ class ConditionSet:
             found.append(f"pace_range must be {MIN_PACE:g} <= low <= high <= 1, got {list(self.pace_range)}")
         if not self.noise_time > 0.0:
             found.append(f"noise_time must be > 0 s, got {self.noise_time}")
+        if self.finish not in FINISH_RULES:
+            found.append(f"finish must be one of {list(FINISH_RULES)}, got {self.finish!r}")
         return found
 
     def draw(self, seed: int, n_karts: int, start_lanes: tuple[int, ...] | None = None) -> RaceConditions:
@@ -152,6 +160,7 @@ class ConditionSet:
             self.noise_time,
             int(np.random.SeedSequence([abs(seed), NOISE_STREAM]).generate_state(1)[0]),
             self._paces(seed, n_karts),
+            self.finish,
         )
 
     def _paces(self, seed: int, n_karts: int) -> tuple[float, ...]:
@@ -243,8 +252,16 @@ VARIED_PACE = replace(
     description="varied, and each kart's pace drawn per race within 2% of the kart's: agents of near pace, neither "
     "one always the faster",
 )
-CONDITION_SETS: dict[str, ConditionSet] = {s.name: s for s in (PAPER, VARIED, VARIED_PACE)}
-ConditionName = Literal["paper", "varied", "varied-pace"]  # the named sets, for typed request fields
+VARIED_EQUAL_DISTANCE = replace(
+    VARIED,
+    name="varied-equal-distance",
+    finish="equal_distance",
+    description="varied, and every kart finishes after the same distance from its own grid slot: no row of a "
+    "field's grid is a head start",
+)
+CONDITION_SETS: dict[str, ConditionSet] = {s.name: s for s in (PAPER, VARIED, VARIED_PACE, VARIED_EQUAL_DISTANCE)}
+# the named sets, for typed request fields
+ConditionName = Literal["paper", "varied", "varied-pace", "varied-equal-distance"]
 
 
 def condition_set(name: str) -> ConditionSet:

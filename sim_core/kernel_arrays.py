@@ -65,6 +65,7 @@ class WorldArrays(NamedTuple):
     ray_dist: np.ndarray  # (B, K, rays) [m]
     ray_hit: np.ndarray  # (B, K, rays) HIT_* kind
     pass_start: np.ndarray  # (B, K, K) step + 1 at which i got ahead of j in a pass not yet held (0: none)
+    finish_at: np.ndarray  # (B, K) [m] progress at which each kart finishes (NaN: at the line, on its last lap)
 
 
 class StepScratch(NamedTuple):

@@ -2,7 +2,8 @@
 
 A lap ends when a kart's count of checkpoints passed reaches a multiple of the track's checkpoints; its end is
 the time of that crossing, interpolated within the step (``F_CROSS_TIME``). The first lap runs from the start
-(race time 0), so a finisher's lap times add up to its finish time.
+(race time 0) and the last ends at the finish, so a finisher's lap times add up to its finish time (where every
+kart races the same distance from its slot, its finish is off the line: its last lap ends there).
 """
 
 from __future__ import annotations
@@ -21,9 +22,13 @@ class LapTimer:
     def observe(self, world: World, race: int = 0) -> None:
         """Note the laps completed in the last step."""
         for k, ends in enumerate(self._ends):
-            laps = max(int(world.istate[race, k, st.I_CP_PASSED]), 0) // self.n_checkpoints
+            if len(ends) == world.laps:
+                continue
+            laps = min(max(int(world.istate[race, k, st.I_CP_PASSED]), 0) // self.n_checkpoints, world.laps - 1)
             while len(ends) < laps:
                 ends.append(float(world.fstate[race, k, st.F_CROSS_TIME]))
+            if world.istate[race, k, st.I_FINISHED]:
+                ends.append(float(world.fstate[race, k, st.F_FINISH_TIME]))
 
     def lap_times(self, kart: int) -> tuple[float, ...]:
         """[s] each completed lap's time, in order."""

@@ -125,6 +125,9 @@ def referee_kart(
             break
         frac = ahead / ds
         _cross_checkpoint(b, k, c, frac, prev_d[k] + frac * (d - prev_d[k]), w, tr, rp, step, by_checkpoint)
+    finish_at = w.finish_at[b, k]
+    if finish_at == finish_at and not I[b, k, I_FINISHED]:
+        _finish_at_distance(b, k, finish_at, race_progress(tr, passed_before, prev_s[k]), w, tr, rp, step)
     # eqs. (10)-(11) as they happen: the lane the kart is in now (with hysteresis), every step
     lane_before = I[b, k, I_LANE_NOW]
     lane_now = lane_with_hysteresis(tr.sample_lane_offsets, idx, d, lane_before, rp[RP_LANE_HYSTERESIS])
@@ -202,10 +205,39 @@ def _cross_checkpoint(
         F[b, k, F_DV_SUM] += abs(F[b, k, F_SPEED] - wanted_speed)
         I[b, k, I_DV_COUNT] += 1
         target_speed[b, k, c] = np.nan
-    if I[b, k, I_CP_PASSED] >= int(rp[RP_LAPS]) * N:
+    if I[b, k, I_CP_PASSED] >= int(rp[RP_LAPS]) * N and w.finish_at[b, k] != w.finish_at[b, k]:
         I[b, k, I_FINISHED] = 1
         F[b, k, F_FINISH_TIME] = (step + frac) * dt
         I[b, k, I_EVENTS] |= EV_FINISHED
+
+
+@njit(**PHASE)
+def _finish_at_distance(
+    b: int, k: int, finish_at: float, before: float, w: WorldArrays, tr: TrackArrays, rp: np.ndarray, step: int
+) -> None:
+    """The finish of a kart that races a distance (``finish_at``: every kart the same distance from its grid
+    slot): it finishes when its progress reaches ``finish_at``, at the time interpolated within the step."""
+    F, I = w.F, w.I
+    now = race_progress(tr, I[b, k, I_CP_PASSED], F[b, k, F_S])
+    if now < finish_at:
+        return
+    frac = min(max((finish_at - before) / (now - before), 0.0), 1.0) if now > before else 1.0
+    I[b, k, I_FINISHED] = 1
+    F[b, k, F_FINISH_TIME] = (step + frac) * rp[RP_DT]
+    I[b, k, I_EVENTS] |= EV_FINISHED
+
+
+@njit(cache=True, inline="always")
+def race_progress(tr: TrackArrays, passed: int, s: float) -> float:
+    """[m] a kart's progress toward the finish: the laps and checkpoints it has passed (``passed``) and its way
+    past the last one to ``s`` (negative when it was driven back over it)."""
+    N = tr.checkpoint_s.shape[0]
+    L = tr.length
+    last = passed % N
+    since = wrap_mod(s - tr.checkpoint_s[last], L)
+    if since > 0.5 * L:  # just behind its last checkpoint (driven back over it)
+        since -= L
+    return (passed // N) * L + tr.checkpoint_s[last] + since
 
 
 @njit(**PHASE)
@@ -297,16 +329,9 @@ def count_passes(b: int, w: WorldArrays, tr: TrackArrays, step: int, scratch: St
     finished ahead; losing the place back first cancels it. The order on the grid is not a pass."""
     F, I = w.F, w.I
     K = F.shape[1]
-    N = tr.checkpoint_s.shape[0]
-    L = tr.length
     progress = scratch.progress
     for k in range(K):
-        passed = I[b, k, I_CP_PASSED]
-        last = passed % N
-        since = wrap_mod(F[b, k, F_S] - tr.checkpoint_s[last], L)
-        if since > 0.5 * L:  # just behind its last checkpoint (driven back over it)
-            since -= L
-        progress[k] = (passed // N) * L + tr.checkpoint_s[last] + since
+        progress[k] = race_progress(tr, I[b, k, I_CP_PASSED], F[b, k, F_S])
     flags_all = w.pair_flags
     for i in range(K):
         for j in range(i + 1, K):

@@ -283,7 +283,7 @@ def sense_batch(
 ) -> None:
     """Cast every kart's rays (used after a reset, before the first step)."""
     empty = np.zeros((0, 0, 0), dtype=np.int64)  # the sensors read no other state
-    w = WorldArrays(F, I, empty, empty, empty, np.zeros((0, 0, 0)), ray_dist, ray_hit, empty)
+    w = WorldArrays(F, I, empty, empty, empty, np.zeros((0, 0, 0)), ray_dist, ray_hit, empty, np.zeros((0, 0)))
     cos, sin, bins = prepare_rays(ray_angles, tr.ray_bins)
     rays = RayTables(cos, sin, bins)
     scratch = make_scratch(F.shape[1], ray_angles.shape[0])

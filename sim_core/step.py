@@ -120,6 +120,7 @@ def step_batch(
     ray_dist: np.ndarray,
     ray_hit: np.ndarray,
     pass_start: np.ndarray,
+    finish_at: np.ndarray,
     actions: np.ndarray,
     tr: TrackArrays,
     kp: np.ndarray,
@@ -136,7 +137,7 @@ def step_batch(
     its arrays), ``rays`` is (3, rays): the :func:`sim_core.sensors.prepare_rays` tables, and the scratch
     buffers are the world's (see :func:`sim_core.kernel_arrays.scratch_views`).
     """
-    w = WorldArrays(F, I, R, pair_flags, target_lane, target_speed, ray_dist, ray_hit, pass_start)
+    w = WorldArrays(F, I, R, pair_flags, target_lane, target_speed, ray_dist, ray_hit, pass_start, finish_at)
     tables = RayTables(rays[0], rays[1], rays[2])
     scratch = scratch_views(scratch_floats, scratch_bools, F.shape[1], rays.shape[1])
     for _ in range(n_steps):

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -24,6 +25,8 @@ from sim_core.track_arrays import shared_track_arrays
 
 MAX_KARTS = 8
 DEFAULT_START_LANES = (2, 3, 1, 4)
+FinishRule = Literal["line", "equal_distance"]  # where a kart finishes: World.reset
+FINISH_RULES: tuple[FinishRule, ...] = ("line", "equal_distance")
 START_OFFSET = 3.0  # [m] the front row stands this far past checkpoint 0 (as in the original)
 ROW_SPACING = 4.0  # [m] between grid rows
 
@@ -115,6 +118,7 @@ class World:
         self.rstate = np.zeros((n_races, st.N_RACE), dtype=np.int64)
         self.pair_flags = np.zeros((n_races, n_karts, n_karts), dtype=np.int64)
         self.pass_start = np.zeros((n_races, n_karts, n_karts), dtype=np.int64)
+        self.finish_at = np.full((n_races, n_karts), np.nan)  # [m] NaN: each kart finishes at the line
         self.target_lane = np.zeros((n_races, n_karts, n), dtype=np.int64)
         self.target_speed = np.full((n_races, n_karts, n), np.nan)
         n_rays = len(self.ray_angles)
@@ -140,14 +144,19 @@ class World:
         wear: float | Sequence[float] | None = None,
         start_offsets: Sequence[float] | None = None,
         paces: Sequence[float] | None = None,
+        finish: FinishRule = "line",
     ) -> None:
         """Put karts on the starting grid of the given races (all by default), at rest.
 
         The front row stands ``START_OFFSET`` m past checkpoint 0 in ``start_lanes`` (default lanes 2, 3, 1, 4);
         karts 5-8 form a second row behind the line; each kart a further ``start_offsets[k]`` m back (a staggered
         grid). ``wear``: the start wear of every kart, or one per kart (default the rules'). ``paces``: each kart's
-        pace handicap (:meth:`set_pace`; default 1, the reference kart). Every counter is cleared.
+        pace handicap (:meth:`set_pace`; default 1, the reference kart). ``finish``: ``"line"``, every kart
+        finishes where it crosses the line on its last lap (the paper's); ``"equal_distance"``, every kart after the
+        same distance from its own slot (:meth:`finish_equal_distance`). Every counter is cleared.
         """
+        if finish not in FINISH_RULES:
+            raise ValueError(f"finish must be one of {list(FINISH_RULES)}, got {finish!r}")
         lanes = tuple(start_lanes) if start_lanes is not None else DEFAULT_START_LANES
         n_lanes = self.track.n_lanes
         if start_lanes is not None and len(lanes) != self.n_karts:
@@ -172,7 +181,15 @@ class World:
                 offset = START_OFFSET - ROW_SPACING * row - behind[k]
                 d = float(self.track.lane_offsets(0)[lane - 1])
                 self.place_kart(b, k, s=offset, d=d, wear=wears[k])
+            if finish == "equal_distance":
+                self.finish_equal_distance(b)
         self.sense()
+
+    def finish_equal_distance(self, race: int) -> None:
+        """Every kart of race ``race`` finishes once it has driven the race's laps from where it stands now (its
+        grid slot): no slot is nearer the flag than another. Call it after placing the karts; the line still
+        counts laps."""
+        self.finish_at[race] = self.total_progress()[race] + self.laps * self.track.length
 
     def set_pace(self, race: int, kart: int, pace: float) -> None:
         """Drive kart ``kart`` of race ``race`` as the reference kart at ``pace`` (:meth:`KartParams.paced`: speeds
@@ -191,6 +208,7 @@ class World:
         self.rstate[race] = 0
         self.pair_flags[race] = 0
         self.pass_start[race] = 0
+        self.finish_at[race] = np.nan
         self.target_lane[race] = 0
         self.target_speed[race] = np.nan
 
@@ -301,6 +319,7 @@ class World:
             self.ray_dist,
             self.ray_hit,
             self.pass_start,
+            self.finish_at,
             actions,
             self.arrays,
             self.kart_rows,
@@ -370,9 +389,13 @@ class World:
         return laps_done * track.length + track.checkpoint_s[last] + since
 
     def standings(self, race: int) -> list[int]:
-        """Kart indices in race order: finishers by time, then the rest by progress."""
+        """Kart indices in race order: finishers by time, then the rest by the distance they have left (their
+        progress, where every kart finishes at the line)."""
         f = self.fstate[race]
-        progress = self.total_progress()[race]
+        finish_at = self.finish_at[race]
+        # a kart racing a distance is as far along as its progress past its own slot
+        head_start = np.where(np.isnan(finish_at), 0.0, finish_at - self.laps * self.track.length)
+        progress = self.total_progress()[race] - head_start
 
         def key(k: int) -> tuple[int, float]:
             if self.istate[race, k, st.I_FINISHED]:
@@ -403,7 +426,7 @@ class World:
                     kart=k,
                     finished=finished,
                     finish_time=float(f[st.F_FINISH_TIME]) if finished else None,
-                    laps_completed=max(int(i[st.I_CP_PASSED]), 0) // n,
+                    laps_completed=self.laps if finished else max(int(i[st.I_CP_PASSED]), 0) // n,
                     checkpoints_passed=int(i[st.I_CP_PASSED]),
                     collisions_at_fault=faults,
                     illegal_lane_changes=illegal,
@@ -433,6 +456,7 @@ class World:
             "rstate": self.rstate.copy(),
             "pair_flags": self.pair_flags.copy(),
             "pass_start": self.pass_start.copy(),
+            "finish_at": self.finish_at.copy(),
             "target_lane": self.target_lane.copy(),
             "target_speed": self.target_speed.copy(),
             "ray_dist": self.ray_dist.copy(),

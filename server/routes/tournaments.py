@@ -66,8 +66,9 @@ class TournamentIn(BaseModel):
     conditions: ConditionName = Field(
         default="varied",
         description="race conditions drawn from each race's seed: varied (launch reactions, start wear, the "
-        "drivers' imprecision), varied-pace (varied, each kart's pace within 2% of the kart's) or paper (the "
-        "original's experiment)",
+        "drivers' imprecision), varied-pace (varied, each kart's pace within 2% of the kart's), "
+        "varied-equal-distance (varied, every kart finishes after the same distance from its grid slot) or paper "
+        "(the original's experiment)",
     )
     team_size: JsonInt = Field(
         default=1,

@@ -37,7 +37,7 @@ def test_the_schedule_has_every_track_and_distinct_seeds_per_race() -> None:
     assert [j.index for j in jobs] == list(range(6)) and spec.total == 6
     assert [j.track for j in jobs] == ["oval"] * 3 + ["complex"] * 3
     assert len({j.seed for j in jobs}) == 6
-    assert all(len(j.agents) == 6 and j.conditions == "varied" for j in jobs)
+    assert all(len(j.agents) == 6 and j.conditions == "varied-equal-distance" for j in jobs)
     assert jobs == FieldSpec(FIVE, tracks=("oval", "complex"), races_per_track=3, field_size=6).jobs()
 
 

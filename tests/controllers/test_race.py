@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from support.constant_driver import ConstantDriver
 
-from controllers.race import RaceSpec, run_race
-from sim_core.conditions import VARIED
+from controllers.race import Placement, RaceSpec, run_race
+from sim_core.conditions import VARIED, ConditionSet
 from sim_core.observation import observe
 from sim_core.params import DT
 from sim_core.state import F_WEAR
@@ -105,3 +105,20 @@ def test_each_kart_drives_at_its_agent_pace_times_the_pace_its_conditions_drew()
 
     run_race(spec, on_step=note)
     assert seen == [(drawn[0], 0.9 * drawn[1])] and drawn[0] != drawn[1] and min(drawn) >= 0.98
+
+
+def test_racing_a_distance_the_same_driver_takes_the_same_time_from_either_row() -> None:
+    """A lane follower alone from the front row's spot (3 m past the line) and from 5 m behind the line (a second
+    row's): at the line the one behind drives 8 m more; racing a distance both drive one lap, and only where
+    the acceleration from rest happened differs."""
+    times = {}
+    for finish in ("line", "equal_distance"):
+        conditions = ConditionSet("rows", finish=finish)  # type: ignore[arg-type]
+        for start in (3.0, -5.0):
+            placed = (Placement(start, 2),)
+            spec = RaceSpec("oval", ("lane-follower",), laps=1, conditions=conditions, placements=placed)
+            result = run_race(spec).result.karts[0]
+            assert result.finished and result.laps_completed == 1
+            times[finish, start] = result.finish_time
+    assert times["line", -5.0] - times["line", 3.0] > 0.3  # 8 m at most 20 m/s
+    assert abs(times["equal_distance", -5.0] - times["equal_distance", 3.0]) < 0.05

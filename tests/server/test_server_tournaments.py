@@ -42,7 +42,11 @@ def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[httpx.Client]:
         ({"races_per_pair": True}, ["body", "races_per_pair"], "must be a number, not a boolean"),
         ({"agents": ["e2e", "fixed-lqng@0.2"]}, ["body", "agents"], "pace must be in [0.5, 1]"),
         ({"id": "bad id!"}, ["body", "id"], "should match pattern"),
-        ({"conditions": "wet"}, ["body", "conditions"], "Input should be 'paper', 'varied' or 'varied-pace'"),
+        (
+            {"conditions": "wet"},
+            ["body", "conditions"],
+            "Input should be 'paper', 'varied', 'varied-pace' or 'varied-equal-distance'",
+        ),
         ({"team_size": 3}, ["body", "team_size"], "less than or equal to 2"),
         ({"team_size": 2, "races_per_pair": 3}, ["body", "races_per_pair"], "mirrored pairs"),
     ],
