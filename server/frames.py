@@ -64,6 +64,7 @@ def build_frame(
                 controller_faults=d.faults,
                 waypoints=() if finished else d.waypoints,
                 predicted=() if finished else d.predicted,
+                team=d.entry.team,
             )
         )
     step = int(world.steps[0])

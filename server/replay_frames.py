@@ -109,6 +109,7 @@ class ReplayFrames:
                     controller_faults=self.controller_faults[k] if k < len(self.controller_faults) else 0,
                     waypoints=plan.waypoints if plan is not None and not finished else (),
                     predicted=plan.predicted if plan is not None and not finished else (),
+                    team=entry.team,
                 )
             )
         return RaceFrame(

@@ -7,6 +7,7 @@ be serialised with :func:`dataclasses.asdict` and compared in tests.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 # One colour per grid slot (RGB 0-255), shared by the 3D view and the pages.
@@ -20,6 +21,21 @@ KART_COLORS: tuple[tuple[int, int, int], ...] = (
     (96, 108, 56),  # olive
     (33, 33, 33),  # black
 )
+# One colour per team, in the order the teams first stand on the grid (slot order): a kart of a team carries it on
+# its roof in the 3D view and beside its name in the HUD and on the pages (the slot colours tell karts apart).
+TEAM_COLORS: tuple[tuple[int, int, int], ...] = (
+    (255, 204, 0),  # yellow
+    (0, 180, 216),  # cyan
+    (214, 40, 160),  # magenta
+    (110, 190, 40),  # green
+)
+
+
+def team_colors(teams: Sequence[str | None]) -> dict[str, tuple[int, int, int]]:
+    """Each team of ``teams`` (one per kart, by grid slot; ``None``: a kart racing for itself) and its colour:
+    :data:`TEAM_COLORS` in the order the teams first appear (again from the first beyond four teams)."""
+    order = list(dict.fromkeys(team for team in teams if team is not None))
+    return {team: TEAM_COLORS[i % len(TEAM_COLORS)] for i, team in enumerate(order)}
 
 
 def kart_label(name: str, controller: str) -> str:
@@ -53,6 +69,7 @@ class KartFrame:
     controller_faults: int  # exceptions, hangs and missed deadlines of its driver
     waypoints: tuple[tuple[float, float], ...] = ()  # the ego plan's waypoints (drawn green; () once finished)
     predicted: tuple[tuple[float, float], ...] = ()  # its planner's predictions of the other karts' waypoints
+    team: str | None = None  # its team (None: it races for itself)
 
 
 @dataclass(frozen=True)

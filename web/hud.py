@@ -10,7 +10,7 @@ import html
 import math
 from collections.abc import Sequence
 
-from web.frame import KART_COLORS, KartFrame, RaceFrame
+from web.frame import KART_COLORS, KartFrame, RaceFrame, team_colors
 from web.meshes import CHECKPOINT_COLOR, PREDICTION_COLOR, WAYPOINT_COLOR
 
 _MARKDOWN_ESCAPES = str.maketrans({c: "\\" + c for c in "\\`*_[]|#!~"})
@@ -31,6 +31,12 @@ def laps_text(laps: int) -> str:
 def _swatch(index: int) -> str:
     r, g, b = KART_COLORS[index % len(KART_COLORS)]
     return f'<span style="color: rgb({r}, {g}, {b})">■</span>'
+
+
+def _team_badge(team: str, color: tuple[int, int, int]) -> str:
+    """The team's name in its colour's box (the roof plate's colour in the 3D view)."""
+    r, g, b = color
+    return f'<span style="border: 2px solid rgb({r}, {g}, {b}); padding: 0 2px">{markdown_text(team)}</span>'
 
 
 def _nowrap(text: str) -> str:
@@ -58,9 +64,11 @@ def hud_text(track_name: str, karts: Sequence[tuple[str, str]], frame: RaceFrame
         head = f"**{markdown_text(track_name)}** · waiting for the start"
     else:
         rows = []
+        teams = team_colors([k.team for k in frame.karts])
         for k in sorted(frame.karts, key=lambda k: k.position):
+            team = "" if k.team is None else " " + _team_badge(k.team, teams[k.team])
             rows.append(
-                f"| {_nowrap(_swatch(k.index) + ' ' + markdown_text(k.name))} | {k.position} | {_lap(k)} | "
+                f"| {_nowrap(_swatch(k.index) + ' ' + markdown_text(k.name) + team)} | {k.position} | {_lap(k)} | "
                 f"{_speed(k)} | {k.collisions_at_fault} | {k.illegal_lane_changes} | "
                 f"{k.controller_faults} |"
             )
@@ -83,5 +91,5 @@ def legend_text() -> str:
     )
     return (
         f"{legend}<br/>at fault: collisions at fault · illegal LC: illegal lane changes · "
-        "controller faults: errors, hangs, missed deadlines, failed plans"
+        "controller faults: errors, hangs, missed deadlines, failed plans · a kart's roof plate: its team's colour"
     )

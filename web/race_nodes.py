@@ -5,7 +5,8 @@ viewer watches its own moment).
 Node names (the same in either scope):
 
 * ``/karts/kart{i}`` (a box in the kart's colour), ``/karts/kart{i}/nose`` (marks the front),
-  ``/karts/kart{i}/label`` (its display name);
+  ``/karts/kart{i}/team`` (a roof plate in its team's colour, :data:`web.frame.TEAM_COLORS`; hidden for a kart
+  racing for itself), ``/karts/kart{i}/label`` (its display name);
 * ``/plans/kart{i}/wp{j}`` (green boxes: the kart's planned waypoints) and ``/plans/kart{i}/pred{j}``
   (translucent orange boxes: its planner's predictions of the other karts' waypoints), hidden when unused.
 
@@ -21,7 +22,7 @@ from collections.abc import Sequence
 import viser
 
 from sim_core.track import Track
-from web.frame import KART_COLORS, KartFrame, RaceFrame, kart_label
+from web.frame import KART_COLORS, KartFrame, RaceFrame, kart_label, team_colors
 from web.hud import hud_text
 from web.meshes import PREDICTION_COLOR, WAYPOINT_COLOR, heading_wxyz
 
@@ -100,6 +101,8 @@ class RaceNodes:
         self._hud_due = 0.0
         self._hud_status = ""
         self.kart_writers: list[_PoseWriter] = []
+        self.team_plates: list[viser.BoxHandle] = []
+        self._teams_shown = False
         self._waypoint_writers: list[list[_PoseWriter]] = []
         self._prediction_writers: list[list[_PoseWriter]] = []
         n = len(self.karts)
@@ -125,6 +128,16 @@ class RaceNodes:
             position=(KART_SIZE[0] / 2 - 0.2, 0.0, KART_SIZE[2] / 2 + 0.03),
             cast_shadow=False,
         )
+        self.team_plates.append(
+            scene.add_box(
+                f"/karts/kart{i}/team",
+                color=(250, 250, 250),
+                dimensions=(KART_SIZE[0] * 0.45, KART_SIZE[1] * 0.9, 0.1),
+                position=(-0.2, 0.0, KART_SIZE[2] / 2 + 0.05),
+                visible=False,
+                cast_shadow=False,
+            )
+        )
         scene.add_label(
             f"/karts/kart{i}/label",
             kart_label(name, controller),
@@ -139,6 +152,8 @@ class RaceNodes:
         ``frame.plans_version`` changed, the HUD every :data:`HUD_PERIOD` or when the status changed. Call it
         inside its scope's ``atomic()``."""
         karts = frame.karts[: len(self.kart_writers)]
+        if not self._teams_shown:
+            self._show_teams(karts)
         for kart in karts:
             self._move_kart(kart)
         if frame.plans_version != self._plans_version:
@@ -149,6 +164,16 @@ class RaceNodes:
             self._hud_due = now + HUD_PERIOD
             self._hud_status = frame.status
             self.hud.content = hud_text(self.track.name, self.karts, frame)
+
+    def _show_teams(self, karts: Sequence[KartFrame]) -> None:
+        """Colour the roof plate of every kart of a team (once: a race's teams do not change)."""
+        self._teams_shown = True
+        colors = team_colors([kart.team for kart in karts])
+        for kart in karts:
+            if kart.team is not None:
+                plate = self.team_plates[kart.index]
+                plate.color = colors[kart.team]
+                plate.visible = True
 
     def _move_kart(self, kart: KartFrame) -> None:
         pose = (kart.x, kart.y, kart.heading)

@@ -35,14 +35,17 @@ pytestmark = [requires_chromium, pytest.mark.slow]
 
 @pytest.fixture(scope="module")
 def finished_race(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, str]]:
-    """(base URL, race id) of a finished two-lap race (the lane follower against Fixed-LQNG on the oval, run
-    at 20x) on the real server with 3D views on."""
+    """(base URL, race id) of a finished two-lap race (the lane follower against Fixed-LQNG on the oval, teams
+    Blue and Red, run at 20x) on the real server with 3D views on."""
     from support.live_server import start_race, wait_status
 
     db = tmp_path_factory.mktemp("browser-replay") / "karting.db"
     settings = server_settings(db, viewer_enabled=True, speedup=20.0, keep_finished_s=1.0)
     with LiveServer(settings) as server, server.client() as client:
-        karts = [{"controller": "lane-follower", "name": "LF"}, {"controller": "fixed-lqng", "name": "Fixed"}]
+        karts = [
+            {"controller": "lane-follower", "name": "LF", "team": "Blue"},
+            {"controller": "fixed-lqng", "name": "Fixed", "team": "Red"},
+        ]
         race = start_race(client, track="oval", laps=2, seed=1, karts=karts)
         wait_status(client, race["id"], ("finished",), 120)
         yield server.url, str(race["id"])
@@ -122,6 +125,8 @@ def _race_page_shows_charts_and_incidents(page: Page, base: str, race_id: str) -
     page.goto(f"{base}/races/{race_id}")
     page.locator("body[data-ready='true']").wait_for()
     assert page.locator("#standings tbody tr").count() == 2
+    for kart, team in ((0, "Blue"), (1, "Red")):  # each kart's team beside its name
+        assert page.locator(f'#standings tr[data-kart="{kart}"] .team[data-team="{team}"]').count() == 1
     assert page.locator("#laps tbody tr").count() == sum(len(k["laps"]) for k in report["karts"])
     for chart in ("positions", "gaps", "speed", "wear"):
         series = page.locator(f'svg[data-chart="{chart}"] g[data-series]')

@@ -15,6 +15,8 @@ import pytest
 from support.browser import PAGE_2D, VIEW_3D, browser_page, readme_screenshot, requires_chromium
 from support.live_server import LiveServer, server_settings, wait_for
 
+from web.frame import TEAM_COLORS
+
 if TYPE_CHECKING:
     from playwright.sync_api import Page, ViewportSize
 
@@ -54,12 +56,14 @@ class Traffic:
 
 @pytest.fixture(scope="module")
 def short_lived_race(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, str]]:
-    """(base URL, race id) of a one-lap race of two lane followers on a server with 3D views that drops a
-    finished race's scene 2 s after its end (``keep_finished_s``; 60 s by default) and races 10 times real time."""
+    """(base URL, race id) of a one-lap race of two lane followers (teams Blue and Red) on a server with 3D views
+    that drops a finished race's scene 2 s after its end (``keep_finished_s``; 60 s by default) and races 10 times
+    real time."""
     db = tmp_path_factory.mktemp("browser-finished") / "karting.db"
     settings = server_settings(db, viewer_enabled=True, keep_finished_s=2.0, speedup=10.0)
     with LiveServer(settings) as server:
-        body = {"track": "oval", "laps": 1, "karts": [{"controller": "lane-follower"}, {"controller": "lane-follower"}]}
+        karts = [{"controller": "lane-follower", "team": "Blue"}, {"controller": "lane-follower", "team": "Red"}]
+        body = {"track": "oval", "laps": 1, "karts": karts}
         response = httpx.post(f"{server.url}/api/races", json=body, timeout=60)
         assert response.status_code == 201, response.text
         yield server.url, str(response.json()["id"])
@@ -153,5 +157,9 @@ def test_the_start_page_fits_a_phone(short_lived_race: tuple[str, str]) -> None:
         name = page.get_by_label("name of kart 1")
         assert name.get_attribute("maxlength") == str(limits["max_name_length"])
         assert name.input_value() == "mcts-lqng 1"  # the API's default name
-        assert "1 lap" in page.locator(f'tr[data-race-id="{race_id}"]').inner_text()
+        row = page.locator(f'tr[data-race-id="{race_id}"]')
+        assert "1 lap" in row.inner_text()
+        badges = [row.locator(f'.team[data-team="{team}"]') for team in ("Blue", "Red")]  # in the teams' colours
+        colours = [badge.evaluate("b => getComputedStyle(b).borderTopColor") for badge in badges]
+        assert colours == [f"rgb({r}, {g}, {b})" for r, g, b in TEAM_COLORS[:2]]
         readme_screenshot(page, "start-phone.png", full_page=True)

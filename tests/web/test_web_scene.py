@@ -4,11 +4,14 @@
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
+import re
 import socket
 import sys
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import msgspec
 import numpy as np
@@ -26,7 +29,7 @@ from support.viser_wire import (
 )
 
 from sim_core.track_io import get_track
-from web.frame import KartFrame, RaceFrame
+from web.frame import KART_COLORS, KartFrame, RaceFrame
 from web.meshes import CHECKPOINT_COLOR, PREDICTION_COLOR, WAYPOINT_COLOR
 from web.scene import WAYPOINT_POOL, RaceScene
 from web.viewer import VISER_SUBPROTOCOL
@@ -202,5 +205,61 @@ def test_hud_counts_down_and_drops_finished_karts_speed() -> None:
         }
         assert "| 18 |" in rows["Driver 0"]  # 5 m/s
         assert "| – |" in rows["Driver 1"] and "✓ 40.50 s" in rows["Driver 1"] and "| 22 |" not in rows["Driver 1"]
+    finally:
+        scene.close()
+
+
+def test_team_colours_follow_the_grid_order_and_repeat_beyond_four_teams() -> None:
+    from web.frame import TEAM_COLORS, team_colors
+
+    assert team_colors([None, "B", "A", "B", None]) == {"B": TEAM_COLORS[0], "A": TEAM_COLORS[1]}
+    five = team_colors(["t1", "t2", "t3", "t4", "t5"])
+    assert five["t5"] == TEAM_COLORS[0] and len(set(five.values())) == 4
+    assert not set(TEAM_COLORS) & set(KART_COLORS)  # a team's colour is never a kart's
+
+
+def test_the_pages_colour_teams_as_the_scene_does() -> None:
+    from web.frame import TEAM_COLORS
+
+    common = (Path(__file__).resolve().parents[2] / "web" / "static" / "common.js").read_text()
+    found = re.search(r"const TEAM_COLORS = (\[.*?\]);", common, re.S)
+    assert found is not None, "common.js has no TEAM_COLORS"
+    assert [tuple(c) for c in json.loads(found.group(1))] == list(TEAM_COLORS)
+
+
+def test_a_teams_karts_carry_its_colour_on_the_roof_and_in_the_hud() -> None:
+    from web.frame import TEAM_COLORS
+
+    track = get_track("oval")
+    karts = [("A", "mcts-rl"), ("B", "fixed-rl"), ("C", "mcts-rl"), ("D", "e2e")]
+    scene = RaceScene(track, karts, "teams")
+    teams = ("Blue", "Red", "Blue", None)
+
+    async def run() -> tuple[list[Message], list[Message]]:
+        async with connect(scene.port) as ws:
+            backlog = await receive_until(ws, replay_done)
+            frame = make_frame(track, 4)
+            team_karts = tuple(KartFrame(**{**k.__dict__, "team": t}) for k, t in zip(frame.karts, teams, strict=True))
+            scene.update(RaceFrame(**{**frame.__dict__, "karts": team_karts}))
+            shown = await receive_until(
+                ws, lambda ms: "/karts/kart2/team" in named(ms, "SetSceneNodeVisibilityMessage")
+            )
+            return backlog, shown
+
+    try:
+        backlog, shown = asyncio.run(run())
+        hidden = {name: m["visible"] for name, m in named(backlog, "SetSceneNodeVisibilityMessage").items()}
+        assert all(hidden[f"/karts/kart{i}/team"] is False for i in range(4))  # before the first frame
+        visible = {name: m["visible"] for name, m in named(shown, "SetSceneNodeVisibilityMessage").items()}
+        assert visible["/karts/kart0/team"] and visible["/karts/kart1/team"] and visible["/karts/kart2/team"]
+        assert "/karts/kart3/team" not in visible  # racing for itself: no plate
+        plates = {name: tuple(m["updates"]["color"]) for name, m in named(shown, "SceneNodeUpdateMessage").items()}
+        assert plates["/karts/kart0/team"] == plates["/karts/kart2/team"] == TEAM_COLORS[0]
+        assert plates["/karts/kart1/team"] == TEAM_COLORS[1] and "/karts/kart3/team" not in plates
+        hud = scene._hud.content
+        blue, red = (f"rgb({r}, {g}, {b})" for r, g, b in TEAM_COLORS[:2])
+        rows = {name: row for row in hud.splitlines() for name in ("Driver 0", "Driver 1", "Driver 3") if name in row}
+        assert blue in rows["Driver 0"] and ">Blue<" in rows["Driver 0"] and red in rows["Driver 1"]
+        assert "rgb(" not in rows["Driver 3"].split("Driver 3")[1].split("|")[0]  # no team badge
     finally:
         scene.close()

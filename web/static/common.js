@@ -7,6 +7,26 @@ const KART_COLORS = [
   [155, 93, 229], [244, 132, 95], [96, 108, 56], [33, 33, 33],
 ];
 
+// One colour per team, in the order the teams first stand on the grid, as web/frame.py TEAM_COLORS.
+const TEAM_COLORS = [[255, 204, 0], [0, 180, 216], [214, 40, 160], [110, 190, 40]];
+
+// Each team of karts (objects with .team, by grid slot) and its colour, as web/frame.py team_colors.
+function teamColors(karts) {
+  const colors = new Map();
+  for (const kart of karts || []) {
+    if (kart.team === null || kart.team === undefined || colors.has(kart.team)) continue;
+    const c = TEAM_COLORS[colors.size % TEAM_COLORS.length];
+    colors.set(kart.team, `rgb(${c[0]}, ${c[1]}, ${c[2]})`);
+  }
+  return colors;
+}
+
+// A kart's team in its colour's box (the roof plate's colour in the 3D view); null for a kart racing for itself.
+function teamBadge(karts, team) {
+  if (team === null || team === undefined) return null;
+  return el("span", {class: "team", "data-team": team, style: `border-color: ${teamColors(karts).get(team)}`}, team);
+}
+
 function kartColor(i) {
   const c = KART_COLORS[((i % KART_COLORS.length) + KART_COLORS.length) % KART_COLORS.length];
   return `rgb(${c[0]}, ${c[1]}, ${c[2]})`;

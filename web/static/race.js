@@ -23,7 +23,7 @@ function kartName(race, index) {
 function kartCell(race, index) {
   const kart = (race.karts || []).find((k) => k.index === index);
   const controller = kart && kart.controller !== kart.name ? el("span", {class: "muted"}, ` (${kart.controller})`) : null;
-  return el("td", {}, swatch(index), kartName(race, index), controller);
+  return el("td", {}, swatch(index), kartName(race, index), controller, teamBadge(race.karts, kart ? kart.team : null));
 }
 function showMessage(text, kind) { msg.textContent = text; msg.className = `msg ${kind || ""}`; }
 

@@ -56,7 +56,7 @@ function raceRow(race) {
     el("td", {}, el("code", {title: id}, id.length > 10 ? id.slice(0, 8) + "…" : id)),
     el("td", {}, track || "–", race.laps ? el("span", {class: "muted small"}, ` · ${plural(race.laps, "lap")}`) : null),
     el("td", {}, el("span", {class: `status ${status}`}, status)),
-    el("td", {class: "small"}, karts.map((k, i) => el("div", {}, swatch(i), kartCell(k, i)))),
+    el("td", {class: "small"}, karts.map((k, i) => el("div", {}, swatch(i), kartCell(k, i), teamBadge(karts, k && k.team)))),
     el("td", {}, standingsCell(race)),
     el("td", {class: "small"},
       live ? el("div", {}, el("a", {href: viewerUrl, target: "_blank", rel: "noopener"}, "viewer")) : null,
