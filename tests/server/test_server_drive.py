@@ -302,3 +302,40 @@ def test_a_view_that_never_loads_delays_the_start_only_so_long(
         driver.until(lambda: bool(driver.states) and driver.states[-1]["status"] == "countdown", 10)
         waited = time.monotonic() - connected
     assert VIEW_READY_WAIT_S - 0.3 < waited < VIEW_READY_WAIT_S + 2.0
+
+
+# ---------------------------------------------------------------------------------------------- a field
+FIELD_RACE = {
+    "track": "oval",
+    "laps": 1,
+    "karts": [
+        {"controller": "human", "name": "Ada", "team": "Red"},
+        {"controller": "mcts-lqng", "name": "Tactical", "team": "Blue"},
+        {"controller": "fixed-rl", "name": "Policy", "team": "Red"},
+        {"controller": "e2e", "name": "End-to-end", "team": "Blue"},
+    ],
+}
+
+
+def test_a_person_drives_in_a_four_kart_field_of_teams(live: LiveServer, client: httpx.Client) -> None:
+    """A human among three AI karts of two teams, at real time: every kart drives off the grid, the tactical
+    planner's plans arrive, no driver faults, and the stopped race's result has every kart and its team."""
+    race = start_race(client, **FIELD_RACE)
+    try:
+        assert set(race["drive_tokens"]) == {"0"}
+        with connect(drive_url(live, race), open_timeout=10) as ws:
+            wait_status(client, race["id"], ("running",), 30)
+            driver = Driver(ws)
+            driver.drive(0.0, 0.8, 4.0)  # down the start straight
+            assert driver.kart["speed"] > 3.0 and not driver.errors
+            detail = client.get(f"/api/races/{race['id']}").json()
+    finally:
+        client.post(f"/api/races/{race['id']}/stop")
+    drivers = {d["name"]: d for d in detail["drivers"]}
+    assert drivers["Tactical"]["plans_applied"] >= 2  # 1 Hz plans, in a field of four
+    assert all(d["controller_faults"] == 0 and not d["disabled"] for d in drivers.values()), drivers
+    on_the_grid = [s["name"] for s in detail["standings"] if s["checkpoints_passed"] < 1]
+    assert len(detail["standings"]) == 4 and not on_the_grid, f"still on the grid: {on_the_grid}"
+    stored = client.get(f"/api/races/{race['id']}").json()
+    assert stored["status"] == "stopped"
+    assert [(k["name"], k["team"]) for k in stored["karts"]] == [(k["name"], k["team"]) for k in FIELD_RACE["karts"]]
