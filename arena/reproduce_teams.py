@@ -17,7 +17,7 @@ from arena.publish import Tournament
 from arena.records import RaceFigures
 from arena.reproduce import PAPER_AGENTS, rate_text
 from arena.stats import COMBINED, tournament_stats
-from arena.teams import TeamFigures, team_figures
+from arena.teams import HOLD_GAP, TeamFigures, team_figures
 from arena.tournament import TournamentSpec
 
 TRACKS = ("oval", "complex")
@@ -58,6 +58,10 @@ def _teammate_passes(figures: TeamFigures | None) -> str:
     return rate_text(figures.races_with_teammate_pass, figures.races)
 
 
+def _rival_held(figures: TeamFigures | None) -> str:
+    return "-" if figures is None else rate_text(figures.races_with_rival_held, figures.races)
+
+
 def _per_track(races: Sequence[RaceFigures]) -> dict[str, dict[str, TeamFigures]]:
     return {track: team_figures([r for r in races if track in (COMBINED, r.track)]) for track in (*TRACKS, COMBINED)}
 
@@ -88,9 +92,12 @@ def team_findings(tournament: Tournament, original_logs: Path | None) -> str:
         "The agents plan for their team (the tactical game's team objective); the RL agents were trained for one "
         "opponent and observe the nearest karts. 95% intervals: Wilson for win rates, bootstrap for means.",
         "",
-        "Cooperation: contacts between a team's own karts per race, and the races in which one of its karts "
+        "Cooperation: contacts between a team's own karts per race; the races in which one of its karts "
         "passed the other (the referee's passes: a place taken and held for 2 s), a team-mate let by or a faster "
-        "team-mate through. Holding a rival back for a team-mate is not measured.",
+        "team-mate through; and the races in which one of its karts held a rival for its team-mate at the flag: "
+        f"it finished directly behind its team-mate and directly ahead of a rival at most {HOLD_GAP:g} s behind it "
+        "(a rival on its tail that did not get by; `arena.teams.rival_held`). The last is read from the finishing "
+        "order and times, not from the race as it ran.",
         "",
         f"The original's figures: {source}. Its grid gave the front row a checkpoint's head start, so its win "
         "rates are not comparable one for one.",
@@ -102,8 +109,8 @@ def team_findings(tournament: Tournament, original_logs: Path | None) -> str:
             "",
             "| team | wins, ours | wins, original | team points, ours | safety per kart-race, ours | "
             "safety, original | unfinished karts, ours | team-mate contacts per race, ours | "
-            "races with a pass between team-mates, ours |",
-            "|---|---|---|---|---|---|---|---|---|",
+            "races with a pass between team-mates, ours | races with a rival held for a team-mate, ours |",
+            "|---|---|---|---|---|---|---|---|---|---|",
         ]
         for agent in PAPER_AGENTS:
             mine, theirs = ours[track].get(agent), original.get(track, {}).get(agent)
@@ -111,7 +118,7 @@ def team_findings(tournament: Tournament, original_logs: Path | None) -> str:
             unfinished = "-" if mine is None else str(mine.unfinished)
             lines.append(
                 f"| {agent} | {_rate(mine)} | {_rate(theirs)} | {points} | {_safety(mine)} | {_safety(theirs)} | "
-                f"{unfinished} | {_teammate(mine)} | {_teammate_passes(mine)} |"
+                f"{unfinished} | {_teammate(mine)} | {_teammate_passes(mine)} | {_rival_held(mine)} |"
             )
         lines.append("")
     lines += [

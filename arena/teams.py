@@ -10,6 +10,11 @@ which a points table can replace:
 * the race is won by the team of the fastest finisher (none when nobody finished); a team's points are its karts'.
 
 A race's teams are ``RaceFigures.teams`` (one label per kart).
+
+Cooperation, per team over its races: contacts between its own karts, passes of one of its karts by another (a
+team-mate let by), and races in which one of its karts **held a rival for a team-mate** at the flag
+(:func:`rival_held`): it finished directly behind its team-mate and directly ahead of a rival no more than
+:data:`HOLD_GAP` behind it, a rival that was on its tail and did not get by.
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ from arena.intervals import Interval, bootstrap_mean, wilson
 from arena.records import RaceFigures
 
 ORIGINAL_POINTS: tuple[float, ...] = (10.0, 7.5, 6.0, 4.0)  # 1st, 2nd, 3rd, 4th (the original's team races)
+HOLD_GAP = 1.0  # [s] a rival finishing within this of the kart ahead was on its tail at the flag
 
 
 @dataclass(frozen=True)
@@ -79,6 +85,7 @@ class TeamFigures:
     teammate_contacts: int | None = None  # contacts between its own karts over its races (None: not measured)
     teammate_passes: int | None = None  # passes of one of its karts by another over its races (None: not measured)
     races_with_teammate_pass: int | None = None  # races in which one of its karts let another by
+    races_with_rival_held: int = 0  # races in which one of its karts held a rival for a team-mate (rival_held)
 
     @property
     def win_rate(self) -> float:
@@ -95,6 +102,11 @@ class TeamFigures:
         """The share of its races in which one of its karts passed another (None: not measured)."""
         known = self.races_with_teammate_pass
         return None if known is None or not self.races else known / self.races
+
+    @property
+    def rival_held_share(self) -> float:
+        """The share of its races in which one of its karts held a rival for a team-mate at the flag."""
+        return self.races_with_rival_held / self.races if self.races else 0.0
 
     def to_json(self) -> dict[str, object]:
         """The figures as JSON."""
@@ -121,6 +133,8 @@ class TeamFigures:
             "teammate_passes": self.teammate_passes,
             "races_with_teammate_pass": self.races_with_teammate_pass,
             "teammate_pass_share": self.teammate_pass_share,
+            "races_with_rival_held": self.races_with_rival_held,
+            "rival_held_share": self.rival_held_share,
         }
 
 
@@ -134,8 +148,11 @@ def team_figures(races: Sequence[RaceFigures], points: Sequence[float] = ORIGINA
     teammate: dict[str, int | None] = {}
     passing: dict[str, int | None] = {}
     passing_races: dict[str, int | None] = {}
+    holding: dict[str, int] = {}
     for race in races:
         result = team_result(race, points)
+        for team in rival_held(race, result):
+            holding[team] = holding.get(team, 0) + 1
         for team, contacts in _between_teammates(race, "contacts_with").items():
             teammate[team] = _add(teammate.get(team, 0), contacts)
         for team, passes in _between_teammates(race, "passes_of", both_ways=True).items():
@@ -168,8 +185,26 @@ def team_figures(races: Sequence[RaceFigures], points: Sequence[float] = ORIGINA
             teammate_contacts=teammate.get(team),
             teammate_passes=passing.get(team),
             races_with_teammate_pass=passing_races.get(team),
+            races_with_rival_held=holding.get(team, 0),
         )
     return figures
+
+
+def rival_held(race: RaceFigures, result: TeamResult | None = None) -> set[str]:
+    """The teams of ``race`` one of whose karts held a rival for a team-mate at the flag: it finished directly
+    behind a team-mate and directly ahead of a kart of another team that finished at most :data:`HOLD_GAP`
+    behind it."""
+    teams = race_teams(race)
+    order = (result or team_result(race)).order
+    held = set()
+    for place in range(1, len(order) - 1):
+        mate, kart, rival = order[place - 1], order[place], order[place + 1]
+        if teams[mate] != teams[kart] or teams[rival] == teams[kart]:
+            continue
+        behind, ahead = race.karts[rival].total_time, race.karts[kart].total_time
+        if behind is not None and ahead is not None and behind - ahead <= HOLD_GAP:
+            held.add(teams[kart])
+    return held
 
 
 def _add(total: int | None, more: int | None) -> int | None:

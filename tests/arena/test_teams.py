@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from arena.records import CHECKPOINT, KartFigures, RaceFigures
-from arena.teams import team_figures, team_result
+from arena.teams import rival_held, team_figures, team_result
 
 
 def _kart(team: str, time: float | None, collisions: int = 0, lane_changes: int = 0) -> KartFigures:
@@ -103,3 +103,24 @@ def test_passes_between_teammates_count_both_ways_and_say_in_how_many_races() ->
     assert (figures["a"].teammate_passes, figures["a"].races_with_teammate_pass) == (2, 1)
     assert figures["a"].teammate_pass_share == 0.5
     assert (figures["b"].teammate_passes, figures["b"].teammate_pass_share) == (0, 0.0)
+
+
+@pytest.mark.parametrize(
+    ("karts", "held"),
+    [
+        ((("a", 80.0), ("a", 81.0), ("b", 81.9), ("b", 85.0)), {"a"}),  # a 1-2, b's first kart 0.9 s behind
+        ((("a", 80.0), ("a", 81.0), ("b", 82.5), ("b", 85.0)), set()),  # the rival 1.5 s back: not on its tail
+        ((("a", 80.0), ("b", 80.5), ("a", 81.0), ("b", 81.2)), set()),  # a's second kart not behind its mate
+        ((("b", 79.0), ("a", 80.0), ("a", 80.4), ("b", 81.0)), {"a"}),  # held in 3rd, behind its mate in 2nd
+        ((("a", 80.0), ("a", 80.3), ("b", None), ("b", 81.0)), {"a"}),  # the unfinished kart takes no place
+        ((("a", 80.0), ("a", 81.0), ("b", 82.0), ("b", 85.0)), {"a"}),  # the gap exactly HOLD_GAP: held
+    ],
+)
+def test_a_rival_is_held_for_a_teammate_from_directly_behind_it_within_a_second(
+    karts: tuple[tuple[str, float | None], ...], held: set[str]
+) -> None:
+    race = _race(*karts)
+    assert rival_held(race) == held
+    figures = team_figures([race, _race(("b", 80.0), ("a", 85.0), ("b", 90.0), ("a", 95.0))])
+    assert figures["a"].races_with_rival_held == len(held & {"a"}) and figures["b"].races_with_rival_held == 0
+    assert figures["a"].rival_held_share == len(held & {"a"}) / 2
