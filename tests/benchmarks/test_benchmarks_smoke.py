@@ -45,8 +45,9 @@ TINY: dict[str, tuple[list[str], set[str]]] = {
     ),
     "lqng.py": (["--repeats", "5"], {"solve_ms_2p", "solve_ms_4p"}),
     "mcts.py": (
-        ["--iterations", "300", "--plan-iterations", "50", "--tracks", "oval"],
-        {"iterations_per_s", "plan_2000_ms", "iterations_per_s_per_track", "plan_2000_ms_per_track", "iterations"},
+        ["--iterations", "300", "--plan-iterations", "50", "--tracks", "oval", "--field", "5"],
+        {"iterations_per_s", "plan_2000_ms", "iterations_per_s_per_track", "plan_2000_ms_per_track", "iterations"}
+        | {"plan_2000_ms_field", "field_karts"},
     ),
     "mcts_strength.py": (["--games", "3", "--budgets", "20,50"], {"optimal_first_move_fraction_by_iterations"}),
     "opponent_models.py": (
