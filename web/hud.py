@@ -90,6 +90,6 @@ def legend_text() -> str:
         )
     )
     return (
-        f"{legend}<br/>at fault: collisions at fault · illegal LC: illegal lane changes · "
-        "controller faults: errors, hangs, missed deadlines, failed plans · a kart's roof plate: its team's colour"
+        f"{legend} · a kart's roof plate: its team's colour<br/>at fault: collisions at fault · "
+        "illegal LC: illegal lane changes · controller faults: errors, hangs, missed deadlines, failed plans"
     )
