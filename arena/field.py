@@ -1,11 +1,14 @@
 """Free-for-all fields: every agent in races of many karts (``karting reproduce field``).
 
 A field race puts ``field_size`` karts on the world's two-row grid (lanes 2, 3, 1, 4 in each row, the second row
-behind the first): the agents in turn, slot by slot, from a different first agent each race
-(:meth:`FieldSpec.lineup`), so over every ``len(agents)`` consecutive races each agent starts from each slot once.
-Under the default ``varied-equal-distance`` conditions every kart finishes after the race's laps from its own
-slot, so no slot is nearer the flag; a slot in front is still a place in front on the road, which the rotation
-spreads evenly over the agents, and :func:`slot_wins` reports how much it decides.
+behind the first): the agents in turn, slot by slot, from a different first agent each pair of races
+(:meth:`FieldSpec.lineup`). Races come in reversed pairs: races 2m and 2m + 1 have the same seed (the same
+conditions per slot) and the second has the first's grid reversed, pole last and last on pole, so each kart
+starts once from the front row and once from the back under the same conditions; over every ``len(agents)``
+pairs each agent starts from each slot equally often. Under the default ``varied-equal-distance`` conditions
+every kart finishes after the race's laps from its own slot, so no slot is nearer the flag; a slot in front is
+still a place in front on the road: :func:`slot_wins` reports how many races each slot won, and
+:func:`row_effect` how many places a kart loses starting from the back row instead of the front, paired.
 
 Per agent, over every kart it raced (:class:`FieldFigures`): the share of karts that finished (a Wilson
 interval), collisions at fault and illegal lane changes per kart-race (bootstrap intervals), and its rating from
@@ -43,6 +46,7 @@ class FieldSpec:
     conditions: str = "varied-equal-distance"
     laps: int | None = None  # None: each track's
     time_limit: float | None = None  # [s] None: the rules' limit
+    reversed_pairs: bool = True  # races 2m and 2m + 1: the same seed, the grid reversed (races_per_track even)
 
     def validate(self) -> FieldSpec:
         """This spec, or a ValueError saying what is wrong."""
@@ -54,6 +58,8 @@ class FieldSpec:
             raise ValueError(f"field_size must be in 2..{MAX_KARTS}, got {self.field_size}")
         if self.races_per_track < 1:
             raise ValueError(f"races_per_track must be >= 1, got {self.races_per_track}")
+        if self.reversed_pairs and self.races_per_track % 2:
+            raise ValueError(f"races_per_track must be even for reversed pairs, got {self.races_per_track}")
         condition_set(self.conditions)
         for track in self.tracks:
             if load_any_track(track).n_lanes < max(DEFAULT_START_LANES):
@@ -61,9 +67,16 @@ class FieldSpec:
         return self
 
     def lineup(self, race: int) -> tuple[str, ...]:
-        """Race ``race``'s agent in each grid slot (slot 0: pole): the agents in turn from agent ``race mod n``."""
+        """Race ``race``'s agent in each grid slot (slot 0: pole): the agents in turn from agent ``round mod n``,
+        where a round is a pair of races (the second of a pair reversed) or, without pairs, one race."""
         n = len(self.agents)
-        return tuple(self.agents[(race + slot) % n] for slot in range(self.field_size))
+        round_ = race // 2 if self.reversed_pairs else race
+        grid = tuple(self.agents[(round_ + slot) % n] for slot in range(self.field_size))
+        return grid[::-1] if self.reversed_pairs and race % 2 else grid
+
+    def seed_of(self, track: int, race: int) -> int:
+        """Race ``race`` of track number ``track``'s seed (both races of a reversed pair have the same)."""
+        return race_seed(self.seed, track, race // 2 if self.reversed_pairs else race)
 
     @property
     def start_lanes(self) -> tuple[int, ...]:
@@ -80,7 +93,7 @@ class FieldSpec:
         jobs: list[RaceJob] = []
         for t, track in enumerate(self.tracks):
             for r in range(self.races_per_track):
-                seed = race_seed(self.seed, t, r)
+                seed = self.seed_of(t, r)
                 job = RaceJob(
                     len(jobs),
                     track,
@@ -162,3 +175,72 @@ def slot_wins(races: Sequence[RaceFigures]) -> list[int]:
         if winner is not None:
             wins[winner] += 1
     return wins
+
+
+@dataclass(frozen=True)
+class RowEffect:
+    """What the row decides, paired: over reversed pairs, the places each kart lost starting from the back row
+    instead of the front under the same conditions (back-row place minus front-row place; positive: the front
+    row helped), overall and per agent, with bootstrap intervals."""
+
+    pairs: int
+    places_lost: float  # mean over karts
+    places_lost_ci95: Interval | None
+    per_agent: dict[str, tuple[float, Interval | None]]
+    same_winner: int  # pairs whose two races the same agent won (the grid did not decide the winning agent)
+
+    def to_json(self) -> dict[str, Any]:
+        """Every figure, intervals as ``[low, high]``."""
+
+        def interval(ci: Interval | None) -> list[float] | None:
+            return None if ci is None else ci.to_json()
+
+        return {
+            "pairs": self.pairs,
+            "places_lost": self.places_lost,
+            "places_lost_ci95": interval(self.places_lost_ci95),
+            "per_agent": {a: {"places_lost": m, "ci95": interval(ci)} for a, (m, ci) in self.per_agent.items()},
+            "same_winner": self.same_winner,
+        }
+
+
+def places(race: RaceFigures) -> list[int]:
+    """Each kart's finishing place (1 first): finishers by time, then the karts that did not finish."""
+    ranked = sorted(range(len(race.karts)), key=lambda k: (not race.karts[k].finished, race.karts[k].total_time or 0))
+    place = [0] * len(race.karts)
+    for p, k in enumerate(ranked):
+        place[k] = p + 1
+    return place
+
+
+def row_effect(races: Sequence[RaceFigures], front_row: int = len(DEFAULT_START_LANES)) -> RowEffect | None:
+    """The paired row effect over the reversed pairs among ``races`` (races ``2m`` and ``2m + 1`` of a schedule
+    with the same track; the second's slot ``s`` is the first's ``n - 1 - s``); None without pairs or without a
+    second row."""
+    by_index = {race.index: race for race in races}
+    lost: dict[str, list[float]] = {}
+    pairs = same = 0
+    for index, first in sorted(by_index.items()):
+        second = by_index.get(index + 1)
+        if index % 2 or second is None or second.track != first.track:
+            continue
+        n = len(first.karts)
+        if [k.agent for k in second.karts] != [k.agent for k in first.karts][::-1]:
+            raise ValueError(f"races {index} and {index + 1} are not a reversed pair")
+        pairs += 1
+        same += first.winner() is not None and first.winner() == second.winner()
+        place_first, place_second = places(first), places(second)
+        for slot in range(n):
+            mirror = n - 1 - slot
+            if (slot < front_row) == (mirror < front_row):
+                continue  # the same row in both races
+            front, back = (place_first[slot], place_second[mirror])
+            if slot >= front_row:
+                front, back = back, front
+            lost.setdefault(first.karts[slot].agent, []).append(float(back - front))
+    every = [v for values in lost.values() for v in values]
+    if not every:
+        return None  # no pairs, or a field of one row
+    per_agent = {a: (sum(v) / len(v), bootstrap_mean(v)) for a, v in sorted(lost.items())}
+    mean = sum(every) / len(every)
+    return RowEffect(pairs, mean, bootstrap_mean(every), per_agent, same)

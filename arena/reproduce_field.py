@@ -14,7 +14,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from arena.field import FieldFigures, FieldSpec, field_figures, slot_wins
+from arena.field import FieldFigures, FieldSpec, field_figures, row_effect, slot_wins
 from arena.intervals import Interval
 from arena.manifest import build_manifest, describe_agent, time_limit_of
 from arena.race import FinishedRace
@@ -78,8 +78,14 @@ def field_findings(spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float)
         f"{spec.races_per_track} races per track under `{spec.conditions}` conditions (seeded per race), "
         f"a time limit of {time_limit_of(spec.time_limit):.0f} s.",
         "- The grid: two rows of four (lanes 2, 3, 1, 4), the second behind the first. The five agents fill the "
-        "slots in turn from a different first agent each race, so each agent starts from each slot equally "
-        "often (three agents have two karts in each race).",
+        "slots in turn from a different first agent each pair of races, so each agent starts from each slot equally "
+        "often (three agents have two karts in each race)"
+        + (
+            "; races come in reversed pairs: the same seed, the second with the first's grid reversed (pole last, "
+            "last on pole), so every kart starts once from each row under the same conditions."
+            if spec.reversed_pairs
+            else "."
+        ),
         f"- Targets for a field: every kart finishes in at least {TARGET_FINISH_RATE:.0%} of races; at most "
         f"{TARGET_COLLISIONS} collisions at fault and {TARGET_ILLEGAL} illegal lane changes (per-step rule) "
         "per kart-race.",
@@ -89,6 +95,7 @@ def field_findings(spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float)
     for track, subset in _per_track(spec, races).items():
         lines += _track_section(track, subset)
     lines += _slot_section(races, spec.field_size)
+    lines += _row_section(races)
     return "\n".join(lines)
 
 
@@ -141,6 +148,28 @@ def _slot_section(races: Sequence[RaceFigures], size: int) -> list[str]:
     ]
 
 
+def _row_section(races: Sequence[RaceFigures]) -> list[str]:
+    effect = row_effect(races)
+    if effect is None:
+        return []
+    lines = [
+        "## The front row, paired (all tracks)",
+        "",
+        f"Over {effect.pairs} reversed pairs (the same seed, the grid reversed), the places a kart lost starting "
+        "from the back row instead of the front, under the same conditions (positive: the front row helped):",
+        "",
+        "| agent | places lost from the back row |",
+        "|---|---|",
+        *(f"| {agent} | {_interval(mean, ci)} |" for agent, (mean, ci) in effect.per_agent.items()),
+        f"| every kart | {_interval(effect.places_lost, effect.places_lost_ci95)} |",
+        "",
+        f"The same agent won both races of {effect.same_winner} of {effect.pairs} pairs; in the others the grid "
+        "decided which agent won.",
+        "",
+    ]
+    return lines
+
+
 def field_json(spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float) -> dict[str, Any]:
     """Every figure per track, the ratings, the slot wins, and every kart of every race."""
     per_track = _per_track(spec, races)
@@ -155,6 +184,7 @@ def field_json(spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float) -> 
             for track, subset in per_track.items()
         },
         "slot_wins": slot_wins(races),
+        "row_effect": None if (effect := row_effect(races)) is None else effect.to_json(),
         "races": [
             {
                 "track": r.track,
