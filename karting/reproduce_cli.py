@@ -86,7 +86,7 @@ def teams(
 
 @app.command()
 def field(
-    races: Annotated[int, typer.Option(min=1, help="races per track (best a multiple of 5)")] = 40,
+    races: Annotated[int, typer.Option(min=1, help="races per track, even (reversed pairs)")] = 40,
     seed: Annotated[int, typer.Option(help="the study's seed")] = 0,
     workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per CPU)")] = None,
     out: Annotated[Path, typer.Option(help="the field results folder")] = Path("docs/results/field"),
