@@ -17,6 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from sim_core import state as st
+from sim_core.conditions import RaceConditions
 from sim_core.params import DT, SimParams
 from sim_core.track import Track
 from sim_core.world import World
@@ -110,10 +111,12 @@ def resimulate(
     laps: int,
     params: SimParams,
     start_lanes: tuple[int, ...] | None = None,
+    conditions: RaceConditions | None = None,
 ) -> RaceTimeline:
     """The race whose replay recorded ``poses`` (steps, K, 6: x, y, heading, speed, steer, throttle per step),
     run again with its recorded inputs on ``track`` over ``laps`` laps with ``params`` (the race's kart preset)
-    from the grid of ``start_lanes``."""
+    from the grid of ``start_lanes``, with the start wear, grid offsets and finish rule of the race's
+    ``conditions`` as drawn (None: the paper's)."""
     poses = np.asarray(poses, dtype=np.float64)
     if poses.ndim != 3 or poses.shape[2] != 6 or poses.shape[1] < 1:
         raise ValueError(f"poses must have shape (steps, karts, 6), got {poses.shape}")
@@ -121,7 +124,15 @@ def resimulate(
     # a tournament may have raced under a longer time limit than the rules' default: never stop before the end
     rules = replace(params.rules, time_limit=max(params.rules.time_limit, n_steps * DT + TIME_LIMIT_MARGIN))
     world = World(track, 1, n_karts, replace(params, rules=rules), laps=laps, sensors=False)
-    world.reset(start_lanes=start_lanes)
+    if conditions is None:
+        world.reset(start_lanes=start_lanes)
+    else:
+        world.reset(
+            start_lanes=start_lanes,
+            wear=conditions.start_wear,
+            start_offsets=conditions.start_offsets,
+            finish=conditions.finish,
+        )
 
     shape = (n_steps + 1, n_karts)
     floats = {name: np.zeros(shape) for name in ("distance", "progress", "wear")}

@@ -19,6 +19,7 @@ from server.db import RaceDatabase, StoredRace
 from server.live import LiveRaces
 from server.race_report import RaceReport, race_report
 from server.replay_frames import ReplayFrames
+from sim_core.conditions import RaceConditions
 from sim_core.params import SimParams, kart_preset
 from sim_core.track import Track
 from web.viewer import ViewersBusyError
@@ -78,7 +79,7 @@ class RecordedRaces:
         poses = np.asarray(replay.get("poses") or [], dtype=np.float64).reshape(-1, len(race.karts), 6)
         params = SimParams(kart=kart_preset(race.kart_preset))
         start_lanes = tuple(race.start_lanes) if race.start_lanes is not None else None
-        timeline = resimulate(poses, track, race.laps, params, start_lanes)
+        timeline = resimulate(poses, track, race.laps, params, start_lanes, _drawn_conditions(race))
         if timeline.pose_error > 1e-6:
             strays = timeline.pose_error
             log.warning("race %s: its re-simulation strays %.3f m from the recorded poses", race_id, strays)
@@ -247,3 +248,16 @@ class StoredReplays:
         if session is not None and (session.live or session.result is None):
             return None
         return await self.scenes().port(race_id)
+
+
+def _drawn_conditions(race: StoredRace) -> RaceConditions | None:
+    """The conditions the race ran under, as its manifest recorded them (None: none recorded, or unreadable)."""
+    manifest = race.result.manifest if race.result is not None else None
+    drawn = manifest.conditions.get("conditions") if manifest is not None else None
+    if not isinstance(drawn, dict):
+        return None
+    try:
+        return RaceConditions.from_json(drawn)
+    except (TypeError, ValueError):
+        log.warning("race %s: its recorded conditions cannot be read; re-simulated under the paper's", race.id)
+        return None

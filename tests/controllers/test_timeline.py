@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 from collections import Counter
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -76,3 +77,17 @@ def test_running_order_by_hand() -> None:
 def test_poses_of_the_wrong_shape_are_refused() -> None:
     with pytest.raises(ValueError, match="poses must have shape"):
         resimulate(np.zeros((10, 2, 4)), load_any_track("oval"), 1, SimParams())
+
+
+def test_a_race_under_drawn_conditions_re_simulates_exactly_with_them() -> None:
+    """Under varied-equal-distance (drawn start wear, the drivers' noise in the recorded inputs, each kart finishing
+    3 m past the line): with its conditions the re-simulation is the race; under the paper's it strays."""
+    spec = RaceSpec(track="oval", controllers=("fixed-lqng", "lane-follower"), laps=1, seed=5)
+    outcome = run_race(replace(spec, conditions="varied-equal-distance"), record=True)
+    assert outcome.replay is not None and outcome.conditions is not None
+    poses, track, params = np.asarray(outcome.replay.poses), load_any_track("oval"), SimParams()
+    timeline = resimulate(poses, track, 1, params, None, outcome.conditions)
+    assert timeline.pose_error == 0.0
+    assert list(timeline.finish_time) == [k.finish_time for k in outcome.result.karts]
+    paper = resimulate(poses, track, 1, params)
+    assert paper.pose_error > 0.0 and list(paper.finish_time) != list(timeline.finish_time)
