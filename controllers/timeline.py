@@ -112,11 +112,13 @@ def resimulate(
     params: SimParams,
     start_lanes: tuple[int, ...] | None = None,
     conditions: RaceConditions | None = None,
+    paces: tuple[float, ...] | None = None,
 ) -> RaceTimeline:
     """The race whose replay recorded ``poses`` (steps, K, 6: x, y, heading, speed, steer, throttle per step),
     run again with its recorded inputs on ``track`` over ``laps`` laps with ``params`` (the race's kart preset)
     from the grid of ``start_lanes``, with the start wear, grid offsets and finish rule of the race's
-    ``conditions`` as drawn (None: the paper's)."""
+    ``conditions`` as drawn (None: the paper's) and each kart at its pace ``paces`` (None: the conditions' draw, or
+    the reference kart)."""
     poses = np.asarray(poses, dtype=np.float64)
     if poses.ndim != 3 or poses.shape[2] != 6 or poses.shape[1] < 1:
         raise ValueError(f"poses must have shape (steps, karts, 6), got {poses.shape}")
@@ -125,12 +127,13 @@ def resimulate(
     rules = replace(params.rules, time_limit=max(params.rules.time_limit, n_steps * DT + TIME_LIMIT_MARGIN))
     world = World(track, 1, n_karts, replace(params, rules=rules), laps=laps, sensors=False)
     if conditions is None:
-        world.reset(start_lanes=start_lanes)
+        world.reset(start_lanes=start_lanes, paces=paces)
     else:
         world.reset(
             start_lanes=start_lanes,
             wear=conditions.start_wear,
             start_offsets=conditions.start_offsets,
+            paces=paces if paces is not None else conditions.paces,
             finish=conditions.finish,
         )
 

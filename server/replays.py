@@ -79,7 +79,11 @@ class RecordedRaces:
         poses = np.asarray(replay.get("poses") or [], dtype=np.float64).reshape(-1, len(race.karts), 6)
         params = SimParams(kart=kart_preset(race.kart_preset))
         start_lanes = tuple(race.start_lanes) if race.start_lanes is not None else None
-        timeline = resimulate(poses, track, race.laps, params, start_lanes, _drawn_conditions(race))
+        drawn = _drawn_conditions(race)
+        # each kart at its pace: an AI kart's handicap times the pace drawn for it, a human's its own (build_world)
+        drawn_paces = drawn.paces if drawn is not None else (1.0,) * len(race.karts)
+        paces = tuple(k.pace * (1.0 if k.human else p) for k, p in zip(race.karts, drawn_paces, strict=True))
+        timeline = resimulate(poses, track, race.laps, params, start_lanes, drawn, paces)
         if timeline.pose_error > 1e-6:
             strays = timeline.pose_error
             log.warning("race %s: its re-simulation strays %.3f m from the recorded poses", race_id, strays)

@@ -91,3 +91,15 @@ def test_a_race_under_drawn_conditions_re_simulates_exactly_with_them() -> None:
     assert list(timeline.finish_time) == [k.finish_time for k in outcome.result.karts]
     paper = resimulate(poses, track, 1, params)
     assert paper.pose_error > 0.0 and list(paper.finish_time) != list(timeline.finish_time)
+
+
+def test_karts_at_a_pace_re_simulate_exactly_at_that_pace() -> None:
+    """varied-pace draws each kart's pace; the second kart is also handicapped to 0.9 by its agent string."""
+    spec = RaceSpec("oval", ("fixed-lqng", "lane-follower@0.9"), laps=1, seed=5, conditions="varied-pace")
+    outcome = run_race(spec, record=True)
+    assert outcome.replay is not None and outcome.conditions is not None
+    poses, track, params = np.asarray(outcome.replay.poses), load_any_track("oval"), SimParams()
+    paces = spec.kart_paces(outcome.conditions)
+    assert paces[1] < 0.9
+    assert resimulate(poses, track, 1, params, None, outcome.conditions, paces).pose_error == 0.0
+    assert resimulate(poses, track, 1, params, None, outcome.conditions).pose_error > 0.0  # drawn paces alone
