@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -89,10 +89,22 @@ def sector_ends(n_checkpoints: int, sectors: int = SECTORS) -> tuple[int, ...]:
     return tuple(round(n_checkpoints * (j + 1) / count) for j in range(count))
 
 
-def lap_reports(crossings: Sequence[Crossing], n_checkpoints: int, laps: int, n_karts: int) -> list[list[LapReport]]:
-    """Every kart's completed laps from its checkpoint crossings, with sector times, positions and gaps."""
+def lap_reports(
+    crossings: Sequence[Crossing],
+    n_checkpoints: int,
+    laps: int,
+    n_karts: int,
+    finish_times: Sequence[float | None] | None = None,
+) -> list[list[LapReport]]:
+    """Every kart's completed laps from its checkpoint crossings, with sector times, positions and gaps. A kart's
+    last lap ends at its finish (``finish_times``, by kart): off the line where every kart raced the same distance
+    from its slot (its wear and speed then those of its last crossing)."""
     ends = sector_ends(n_checkpoints)
     at: dict[tuple[int, int], Crossing] = {(c.kart, c.checkpoint): c for c in crossings}
+    for k, finish in enumerate(finish_times or ()):
+        last = max((c for c in crossings if c.kart == k), key=lambda c: c.checkpoint, default=None)
+        if finish is not None and last is not None:
+            at[k, laps * n_checkpoints] = replace(last, checkpoint=laps * n_checkpoints, time=finish)
     leader: dict[int, float] = {}  # lap -> race time the first kart completed it
     order: dict[int, list[float]] = {}
     for lap in range(1, laps + 1):
@@ -161,7 +173,7 @@ def incident_reports(incidents: Sequence[Incident], timeline: RaceTimeline) -> l
 def race_report(race_id: str, timeline: RaceTimeline, laps: int) -> RaceReport:
     """The figures of race ``race_id`` (``laps`` laps) from its re-simulated timeline."""
     n_karts, dt = timeline.n_karts, timeline.dt
-    laps_by_kart = lap_reports(timeline.crossings, timeline.n_checkpoints, laps, n_karts)
+    laps_by_kart = lap_reports(timeline.crossings, timeline.n_checkpoints, laps, n_karts, timeline.finish_time)
     finishes = [t for t in timeline.finish_time if t is not None]
     winner_time = min(finishes) if finishes else None
     every = max(1, round(WEAR_PERIOD / dt))

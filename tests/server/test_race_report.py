@@ -53,6 +53,23 @@ def test_an_unfinished_lap_is_left_out() -> None:
     assert [lap.lap for lap in laps] == [1]
 
 
+def test_racing_a_distance_the_last_lap_ends_at_each_karts_finish() -> None:
+    """Kart 0 (front row) finishes 0.3 s after its last crossing of the line; kart 1 (second row) 0.2 s before
+    its own: both last laps end at the finish, kart 1's last sector short of the line, and kart 1 is placed first."""
+    crossings = _crossings(0, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]) + _crossings(
+        1, [1.1, 2.1, 3.1, 4.1, 5.0, 6.0, 7.0]
+    )
+    kart0, kart1 = lap_reports(crossings, n_checkpoints=4, laps=2, n_karts=2, finish_times=(8.3, 7.9))
+    assert [lap.lap for lap in kart0] == [1, 2] and [lap.lap for lap in kart1] == [1, 2]
+    assert kart0[1].end_time == 8.3 and kart0[1].time == pytest.approx(4.3) and kart0[1].sectors[-1] == 1.3
+    assert kart1[1].end_time == 7.9 and kart1[1].time == pytest.approx(3.8)
+    assert sum(lap.time for lap in kart1) == pytest.approx(7.9)
+    assert (kart1[1].position, kart0[1].position) == (1, 2) and kart0[1].gap == pytest.approx(0.4)
+    assert kart1[1].speed == 17.0  # its last crossing's figures (checkpoint 7)
+    at_the_line = lap_reports(crossings, n_checkpoints=4, laps=2, n_karts=2, finish_times=(8.0, None))
+    assert at_the_line[0] == lap_reports(crossings, n_checkpoints=4, laps=2, n_karts=2)[0]  # the same laps
+
+
 def test_speed_along_the_lap_by_hand() -> None:
     # a 100 m lap in 4 stretches of 25 m, 2 laps; the last row is after the finish and left out
     progress = np.array([0.0, 10.0, 30.0, 60.0, 90.0, 110.0, 160.0])

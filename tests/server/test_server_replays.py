@@ -43,8 +43,13 @@ def client(live: LiveServer) -> Iterator[httpx.Client]:
 
 @pytest.fixture(scope="module")
 def races(client: httpx.Client) -> list[dict[str, Any]]:
-    """Two finished one-lap races (seeds 1 and 2), as created."""
-    created = [start_race(client, **RACE, seed=seed) for seed in (1, 2)]
+    """Two finished one-lap races (seeds 1 and 2), as created; the second under drawn conditions, the lane
+    follower handicapped."""
+    paced = {**RACE, "karts": [{"controller": "lane-follower", "pace": 0.95}, {"controller": "fixed-lqng"}]}
+    created = [
+        start_race(client, **RACE, seed=1),
+        start_race(client, **paced, seed=2, conditions="varied-equal-distance"),
+    ]
     for race in created:
         wait_status(client, race["id"], ("finished",), 120)
     return created
@@ -95,6 +100,21 @@ def test_the_report_agrees_with_the_result(races: list[dict[str, Any]], client: 
             assert counted[kart["index"], kind] == kart[field], kind
         assert len(figures["speed_by_lap"]) == 1 and len(figures["speed_by_lap"][0]) == len(report["distance_bins"])
         assert len(figures["wear"]) == len(report["wear_times"])
+
+
+def test_a_race_under_drawn_conditions_and_a_handicap_is_re_simulated_as_it_ran(
+    races: list[dict[str, Any]], client: httpx.Client
+) -> None:
+    race_id = races[1]["id"]
+    result = client.get(f"/api/races/{race_id}/result").json()
+    report = client.get(f"/api/races/{race_id}/report").json()
+    assert report["pose_error"] == 0.0
+    finished = [k for k in result["karts"] if k["finished"]]
+    assert finished, "nobody finished: the finish times would not be compared"
+    for kart in finished:
+        assert sum(lap["time"] for lap in report["karts"][kart["index"]]["laps"]) == pytest.approx(
+            kart["finish_time"], abs=2e-3
+        )
 
 
 def test_the_replay_scene_opens_on_demand_and_is_bounded(
