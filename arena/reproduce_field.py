@@ -16,7 +16,7 @@ from typing import Any
 
 from arena.field import FieldFigures, FieldSpec, field_figures, row_effect, slot_wins
 from arena.intervals import Interval
-from arena.manifest import build_manifest, describe_agent, time_limit_of
+from arena.manifest import build_manifest, describe_agent, source_commit, time_limit_of
 from arena.race import FinishedRace
 from arena.ratings import ratings
 from arena.records import PER_STEP, RaceFigures
@@ -43,6 +43,7 @@ def run_field(
     spec: FieldSpec, workers: int | None = None, on_race: Callable[[int, int], None] | None = None
 ) -> list[RaceFigures]:
     """Every race of ``spec`` (worker processes), in schedule order; ``on_race(done, total)`` after each."""
+    source_commit()  # the code the races run with, before the study writes anything (the manifest's commit)
     finished: dict[int, FinishedRace] = {}
     for race in race_stream(spec.jobs(), workers=workers):
         finished[race.job.index] = race
@@ -207,10 +208,11 @@ def field_json(spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float) -> 
 
 def write_field(out: Path, spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float) -> None:
     """``OUT/README.md``, ``OUT/field.json`` and ``OUT/manifest.json``."""
+    # the manifest first: the files written here are tracked, and would otherwise count as changed code
+    manifest = build_manifest("field", [describe_agent(a) for a in spec.agents], "paper", spec.to_json())
     out.mkdir(parents=True, exist_ok=True)
     (out / "README.md").write_text(field_findings(spec, races, wall_s))
     (out / "field.json").write_text(json.dumps(field_json(spec, races, wall_s), indent=1) + "\n")
-    manifest = build_manifest("field", [describe_agent(a) for a in spec.agents], "paper", spec.to_json())
     (out / "manifest.json").write_text(json.dumps(manifest.to_json(), indent=1) + "\n")
 
 
