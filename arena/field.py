@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from arena.intervals import Interval, bootstrap_mean, wilson
+from arena.intervals import Interval, bootstrap_mean, interval_json, wilson
 from arena.race import RaceJob
 from arena.records import PER_STEP, RaceFigures, winner_index
 from arena.tournament import race_seed
@@ -136,8 +136,7 @@ class FieldFigures:
         """Every figure, intervals as ``[low, high]``."""
         data = asdict(self)
         for key in ("finished_ci95", "collisions_ci95", "illegal_ci95"):
-            interval = getattr(self, key)
-            data[key] = interval.to_json() if interval is not None else None
+            data[key] = interval_json(getattr(self, key))
         return {**data, "finish_rate": self.finish_rate}
 
 
@@ -191,10 +190,7 @@ class RowEffect:
 
     def to_json(self) -> dict[str, Any]:
         """Every figure, intervals as ``[low, high]``."""
-
-        def interval(ci: Interval | None) -> list[float] | None:
-            return None if ci is None else ci.to_json()
-
+        interval = interval_json
         return {
             "pairs": self.pairs,
             "places_lost": self.places_lost,

@@ -39,6 +39,11 @@ class Interval:
         return self.low <= value <= self.high
 
 
+def interval_json(interval: Interval | None) -> list[float] | None:
+    """``[low, high]`` of ``interval``, or None where there is none (too few samples)."""
+    return None if interval is None else interval.to_json()
+
+
 def wilson(successes: int, trials: int, confidence: float = CONFIDENCE) -> Interval | None:
     """The Wilson score interval of ``successes`` in ``trials`` (``None`` without trials)."""
     if trials <= 0:

@@ -22,7 +22,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from arena.intervals import Interval, bootstrap_mean, wilson
+from arena.intervals import Interval, bootstrap_mean, interval_json, wilson
 from arena.records import RaceFigures
 
 ORIGINAL_POINTS: tuple[float, ...] = (10.0, 7.5, 6.0, 4.0)  # 1st, 2nd, 3rd, 4th (the original's team races)
@@ -110,10 +110,7 @@ class TeamFigures:
 
     def to_json(self) -> dict[str, object]:
         """The figures as JSON."""
-
-        def interval(ci: Interval | None) -> list[float] | None:
-            return None if ci is None else ci.to_json()
-
+        interval = interval_json
         return {
             "team": self.team,
             "races": self.races,
