@@ -97,7 +97,8 @@ def team_findings(tournament: Tournament, original_logs: Path | None) -> str:
         "team-mate through; and the races in which one of its karts held a rival for its team-mate at the flag: "
         f"it finished directly behind its team-mate and directly ahead of a rival at most {HOLD_GAP:g} s behind it "
         "(a rival on its tail that did not get by; `arena.teams.rival_held`). The last is read from the finishing "
-        "order and times, not from the race as it ran.",
+        "order and times, not from the race as it ran; the original's logs give it too (its logs record no "
+        "contacts or passes by pair), though its head-start grid made one team's 1-2 finish more likely.",
         "",
         f"The original's figures: {source}. Its grid gave the front row a checkpoint's head start, so its win "
         "rates are not comparable one for one.",
@@ -109,8 +110,9 @@ def team_findings(tournament: Tournament, original_logs: Path | None) -> str:
             "",
             "| team | wins, ours | wins, original | team points, ours | safety per kart-race, ours | "
             "safety, original | unfinished karts, ours | team-mate contacts per race, ours | "
-            "races with a pass between team-mates, ours | races with a rival held for a team-mate, ours |",
-            "|---|---|---|---|---|---|---|---|---|---|",
+            "races with a pass between team-mates, ours | races with a rival held for a team-mate, ours | "
+            "rival held, original |",
+            "|---|---|---|---|---|---|---|---|---|---|---|",
         ]
         for agent in PAPER_AGENTS:
             mine, theirs = ours[track].get(agent), original.get(track, {}).get(agent)
@@ -118,7 +120,8 @@ def team_findings(tournament: Tournament, original_logs: Path | None) -> str:
             unfinished = "-" if mine is None else str(mine.unfinished)
             lines.append(
                 f"| {agent} | {_rate(mine)} | {_rate(theirs)} | {points} | {_safety(mine)} | {_safety(theirs)} | "
-                f"{unfinished} | {_teammate(mine)} | {_teammate_passes(mine)} | {_rival_held(mine)} |"
+                f"{unfinished} | {_teammate(mine)} | {_teammate_passes(mine)} | {_rival_held(mine)} | "
+                f"{_rival_held(theirs)} |"
             )
         lines.append("")
     lines += [
