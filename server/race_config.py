@@ -80,11 +80,16 @@ class RaceConfig:
         return condition_set(self.conditions).draw(self.seed, len(self.karts), self.start_lanes)
 
 
+def kart_paces(karts: Sequence[KartEntry], drawn_paces: Sequence[float], humans: Sequence[bool]) -> tuple[float, ...]:
+    """Each kart's pace: its handicap (a human's too), an AI kart's times the pace the conditions drew for it."""
+    return tuple(k.pace * (1.0 if human else drawn) for k, drawn, human in zip(karts, drawn_paces, humans, strict=True))
+
+
 def build_world(config: RaceConfig, params: SimParams, drawn: RaceConditions, humans: Sequence[bool]) -> World:
-    """The race's one-race world on its grid: the drawn start wear and offsets, and each kart at its pace handicap
-    (a human's too), an AI kart's times the pace the conditions drew."""
+    """The race's one-race world on its grid: the drawn start wear and offsets, and each kart at its pace
+    (:func:`kart_paces`)."""
     world = World(config.track, 1, len(config.karts), params, laps=config.laps)
-    paces = [k.pace * (1.0 if human else drawn.paces[k.index]) for k, human in zip(config.karts, humans, strict=True)]
+    paces = kart_paces(config.karts, drawn.paces, humans)
     world.reset(
         start_lanes=config.start_lanes,
         wear=drawn.start_wear,

@@ -17,6 +17,7 @@ import numpy as np
 from controllers.timeline import RaceTimeline, resimulate
 from server.db import RaceDatabase, StoredRace
 from server.live import LiveRaces
+from server.race_config import kart_paces
 from server.race_report import RaceReport, race_report
 from server.replay_frames import ReplayFrames
 from sim_core.conditions import RaceConditions
@@ -80,9 +81,8 @@ class RecordedRaces:
         params = SimParams(kart=kart_preset(race.kart_preset))
         start_lanes = tuple(race.start_lanes) if race.start_lanes is not None else None
         drawn = _drawn_conditions(race)
-        # each kart at its pace: an AI kart's handicap times the pace drawn for it, a human's its own (build_world)
         drawn_paces = drawn.paces if drawn is not None else (1.0,) * len(race.karts)
-        paces = tuple(k.pace * (1.0 if k.human else p) for k, p in zip(race.karts, drawn_paces, strict=True))
+        paces = kart_paces(race.karts, drawn_paces, [k.human for k in race.karts])
         timeline = resimulate(poses, track, race.laps, params, start_lanes, drawn, paces)
         if timeline.pose_error > 1e-6:
             strays = timeline.pose_error

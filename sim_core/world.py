@@ -393,9 +393,10 @@ class World:
         progress, where every kart finishes at the line)."""
         f = self.fstate[race]
         finish_at = self.finish_at[race]
-        # a kart racing a distance is as far along as its progress past its own slot
-        head_start = np.where(np.isnan(finish_at), 0.0, finish_at - self.laps * self.track.length)
-        progress = self.total_progress()[race] - head_start
+        progress = self.total_progress()[race]
+        if not np.isnan(finish_at).all():  # (this runs every live tick: the common race pays no more)
+            # a kart racing a distance is as far along as its progress past its own slot
+            progress = progress - np.where(np.isnan(finish_at), 0.0, finish_at - self.laps * self.track.length)
 
         def key(k: int) -> tuple[int, float]:
             if self.istate[race, k, st.I_FINISHED]:
