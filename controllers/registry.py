@@ -53,13 +53,19 @@ from controllers.lq.presets import fixed_line_tracker, mcts_tracker
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
 from controllers.rl.agents import (
     E2EParams,
+    E2EShieldedParams,
     FixedRLParams,
+    FixedRLSideRoomParams,
     MCTSRLAdaptiveParams,
     MCTSRLParams,
+    MCTSRLSideRoomParams,
     build_e2e,
+    build_e2e_shielded,
     build_fixed_rl,
+    build_fixed_rl_side_room,
     build_mcts_rl,
     build_mcts_rl_adaptive,
+    build_mcts_rl_side_room,
 )
 from controllers.tactical.high_level import HOLD_GAIN, AdaptiveOpponentParams, MCTSPlanner, TacticalParams
 from sim_core.params import MIN_PACE
@@ -218,6 +224,26 @@ _SPECS: tuple[ControllerSpec[Any], ...] = (
         "A PPO self-play policy driving end to end at 25 Hz toward the checkpoint centres, no planner (E2E).",
         build_e2e,
         E2EParams,
+    ),
+    _spec(
+        "mcts-rl-side-room",
+        "mcts-rl whose tracker never moves sideways into a kart alongside faster than the referee allows (it "
+        "turns away in time).",
+        build_mcts_rl_side_room,
+        MCTSRLSideRoomParams,
+    ),
+    _spec(
+        "fixed-rl-side-room",
+        "fixed-rl whose tracker never moves sideways into a kart alongside faster than the referee allows.",
+        build_fixed_rl_side_room,
+        FixedRLSideRoomParams,
+    ),
+    _spec(
+        "e2e-shielded",
+        "e2e held to the hierarchical RL agents' traffic shields: it keeps its distance to a kart ahead in its "
+        "path and gives room to one alongside.",
+        build_e2e_shielded,
+        E2EShieldedParams,
     ),
 )
 

@@ -90,14 +90,16 @@ def field(
     seed: Annotated[int, typer.Option(help="the study's seed")] = 0,
     workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per CPU)")] = None,
     out: Annotated[Path, typer.Option(help="the field results folder")] = Path("docs/results/field"),
+    agents: Annotated[str | None, typer.Option(help="agents, comma separated (default: the paper's five)")] = None,
 ) -> None:
-    """Race the five agents in 8-kart free-for-all fields (oval, complex, brands-hatch; varied conditions, each
-    kart finishing after the same distance from its slot) and write each agent's finish rate, safety per
-    kart-race and rating into OUT/ (README.md, field.json, manifest)."""
+    """Race the five agents (or AGENTS) in 8-kart free-for-all fields (oval, complex, brands-hatch; varied
+    conditions, each kart finishing after the same distance from its slot) and write each agent's finish rate,
+    safety per kart-race and rating into OUT/ (README.md, field.json, manifest)."""
+    from arena.reproduce import PAPER_AGENTS
     from arena.reproduce_field import field_spec, run_field, write_field
 
     try:
-        spec = field_spec(races, seed)
+        spec = field_spec(races, seed, tuple(agents.split(",")) if agents else PAPER_AGENTS)
     except ValueError as exc:
         error(str(exc))
         raise typer.Exit(2) from None

@@ -28,7 +28,7 @@ from controllers.base import Action, ActionFilter, Controller, RaceContext
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.parameters import parameter
-from controllers.rl.filters import KeepDistance, LineSpeedCeiling, RecoverFromStall
+from controllers.rl.filters import GiveRoomAlongside, KeepDistance, LineSpeedCeiling, RecoverFromStall
 from controllers.rl.tracker import RLTracker
 from controllers.tactical.high_level import AdaptiveOpponentParams, MCTSPlanner, TacticalParams
 from controllers.tactical.opponents import AgentFactory
@@ -47,6 +47,11 @@ LOOKAHEAD_HELP = (
     "controllers.rl.filters.KeepDistance)"
 )
 LINE_MARGIN_HELP = "how far the planner's racing line keeps inside the walls"
+SIDE_CLEARANCE_HELP = (
+    "the gap across, centre to centre, to a kart alongside at which the kart's own sideways speed toward it is down "
+    "to half the referee's fault threshold; it turns away before (ours, not the paper's: "
+    "controllers.rl.filters.GiveRoomAlongside)"
+)
 
 
 @dataclass(frozen=True)
@@ -70,12 +75,26 @@ class MCTSRLAdaptiveParams(MCTSRLParams, AdaptiveOpponentParams):
 
 
 @dataclass(frozen=True)
+class MCTSRLSideRoomParams(MCTSRLParams):
+    """Public parameters of ``mcts-rl-side-room``: ``mcts-rl``'s and the room it gives a kart alongside."""
+
+    side_clearance_m: float = parameter(1.1, SIDE_CLEARANCE_HELP, unit="m", minimum=0.9, maximum=3.0)
+
+
+@dataclass(frozen=True)
 class FixedRLParams:
     """Public parameters of ``fixed-rl``."""
 
     line_margin_m: float = parameter(1.0, LINE_MARGIN_HELP, unit="m", minimum=0.5, maximum=3.0)
     speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
     keep_distance_lookahead_s: float = parameter(0.8, LOOKAHEAD_HELP, unit="s", minimum=0.0, maximum=2.0)
+
+
+@dataclass(frozen=True)
+class FixedRLSideRoomParams(FixedRLParams):
+    """Public parameters of ``fixed-rl-side-room``: ``fixed-rl``'s and the room it gives a kart alongside."""
+
+    side_clearance_m: float = parameter(1.1, SIDE_CLEARANCE_HELP, unit="m", minimum=0.9, maximum=3.0)
 
 
 @dataclass(frozen=True)
@@ -87,13 +106,36 @@ class E2EParams:
     )
 
 
+@dataclass(frozen=True)
+class E2EShieldedParams(E2EParams):
+    """Public parameters of ``e2e-shielded``: ``e2e``'s and the two traffic shields of the hierarchical RL
+    agents."""
+
+    keep_distance_lookahead_s: float = parameter(0.8, LOOKAHEAD_HELP, unit="s", minimum=0.0, maximum=2.0)
+    side_clearance_m: float = parameter(1.1, SIDE_CLEARANCE_HELP, unit="m", minimum=0.9, maximum=3.0)
+
+
 def _rl_filters(line_margin: float, ceiling_margin: float, lookahead: float) -> tuple[ActionFilter, ...]:
     """A hierarchical RL agent's filters: the line's speed ceiling, the distance kept, the stall recovery."""
     return (LineSpeedCeiling(ceiling_margin, line_margin), KeepDistance(lookahead), RecoverFromStall())
 
 
-def build_mcts_rl(params: MCTSRLParams, name: str = "mcts-rl", agent_factory: AgentFactory | None = None) -> Controller:
-    """MCTS planner + RL tracker (``agent_factory``: what builds the agents of simulated opponent models)."""
+def _side_room_filters(
+    line_margin: float, ceiling_margin: float, lookahead: float, clearance: float
+) -> tuple[ActionFilter, ...]:
+    """The hierarchical RL agent's filters with room given to a kart alongside before the stall recovery."""
+    ceiling, keep, recover = _rl_filters(line_margin, ceiling_margin, lookahead)
+    return (ceiling, keep, GiveRoomAlongside(clearance), recover)
+
+
+def build_mcts_rl(
+    params: MCTSRLParams,
+    name: str = "mcts-rl",
+    agent_factory: AgentFactory | None = None,
+    filters: tuple[ActionFilter, ...] | None = None,
+) -> Controller:
+    """MCTS planner + RL tracker (``agent_factory``: what builds the agents of simulated opponent models;
+    ``filters``: the tracker's action filters, by default ``mcts-rl``'s)."""
     planner = MCTSPlanner.from_settings(
         params,
         agent_factory=agent_factory,
@@ -102,8 +144,15 @@ def build_mcts_rl(params: MCTSRLParams, name: str = "mcts-rl", agent_factory: Ag
         # held mcts-rl 5-17 m back, too far to ever pass
         planned_speeds_behind=False,
     )
-    filters = _rl_filters(1.0, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
+    if filters is None:
+        filters = _rl_filters(1.0, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
     return HierarchicalController(name, planner, RLTracker("mcts-rl", filters=filters), rate_hz=RL_RATE_HZ)
+
+
+def build_mcts_rl_side_room(params: MCTSRLSideRoomParams) -> Controller:
+    """``mcts-rl`` whose tracker gives a kart alongside room (:class:`GiveRoomAlongside`)."""
+    margins = (1.0, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
+    return build_mcts_rl(params, "mcts-rl-side-room", filters=_side_room_filters(*margins, params.side_clearance_m))
 
 
 def build_mcts_rl_adaptive(params: MCTSRLAdaptiveParams, agent_factory: AgentFactory) -> Controller:
@@ -118,15 +167,27 @@ def build_fixed_rl(params: FixedRLParams) -> Controller:
     return HierarchicalController("fixed-rl", planner, RLTracker("fixed-rl", filters=filters), rate_hz=RL_RATE_HZ)
 
 
+def build_fixed_rl_side_room(params: FixedRLSideRoomParams) -> Controller:
+    """``fixed-rl`` whose tracker gives a kart alongside room (:class:`GiveRoomAlongside`)."""
+    planner = FixedLinePlanner(margin=params.line_margin_m)
+    margins = (params.line_margin_m, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
+    tracker = RLTracker("fixed-rl", filters=_side_room_filters(*margins, params.side_clearance_m))
+    return HierarchicalController("fixed-rl-side-room", planner, tracker, rate_hz=RL_RATE_HZ)
+
+
 class E2EController:
     """The end-to-end agent: the RL policy on checkpoint-centre targets, no planner."""
 
-    name = "e2e"
     rate_hz = RL_RATE_HZ
 
     def __init__(
-        self, folder: str | None = None, deterministic: bool = True, filters: Sequence[ActionFilter] = ()
+        self,
+        folder: str | None = None,
+        deterministic: bool = True,
+        filters: Sequence[ActionFilter] = (),
+        name: str = "e2e",
     ) -> None:
+        self.name = name
         self.tracker = RLTracker("e2e", folder, deterministic, filters)
 
     def reset(self, context: RaceContext) -> None:
@@ -141,3 +202,14 @@ class E2EController:
 def build_e2e(params: E2EParams) -> Controller:
     """The end-to-end agent with the stall recovery."""
     return E2EController(deterministic=params.deterministic, filters=(RecoverFromStall(),))
+
+
+def build_e2e_shielded(params: E2EShieldedParams) -> Controller:
+    """The end-to-end agent held to the hierarchical RL agents' traffic shields: the distance kept to a kart
+    ahead in its path and the room given to one alongside (no speed ceiling: that is a planner's line)."""
+    filters = (
+        KeepDistance(params.keep_distance_lookahead_s),
+        GiveRoomAlongside(params.side_clearance_m),
+        RecoverFromStall(),
+    )
+    return E2EController(deterministic=params.deterministic, filters=filters, name="e2e-shielded")

@@ -5,6 +5,8 @@
   (:class:`~controllers.rl.shield.LineSpeedShield`);
 * :class:`KeepDistance` — never closing on a kart ahead in the path faster than braking could still meet it
   short of the rules' buffer (:class:`~controllers.rl.shield.FollowingShield`);
+* :class:`GiveRoomAlongside` — never moving sideways into a kart alongside faster than the referee lets a kart
+  alongside move (:class:`~controllers.rl.side_room.SideRoomShield`);
 * :class:`RecoverFromStall` — a stalled kart drives off (or backs off a wall) for 1 s, and the policy never
   reverses on its own (:class:`~controllers.rl.recovery.StallRecovery`).
 """
@@ -18,6 +20,7 @@ from controllers.base import Action, RaceContext
 from controllers.racing_line import optimise_racing_line
 from controllers.rl.recovery import StallRecovery
 from controllers.rl.shield import FollowingShield, LineSpeedShield
+from controllers.rl.side_room import SideRoomShield
 from sim_core.observation import Observation
 from sim_core.track import Track
 
@@ -70,6 +73,40 @@ class KeepDistance:
     @property
     def took_over(self) -> bool:
         """Never: it only lowers the policy's pedal."""
+        return False
+
+
+@dataclass
+class GiveRoomAlongside:
+    """Steer no further toward a kart alongside than closes the gap across to ``clearance`` [m] (centre to
+    centre); the course is measured from the kart's displacement between decisions."""
+
+    clearance: float = 1.1  # [m]
+    _shield: SideRoomShield | None = field(default=None, init=False, repr=False)
+    _track: Track | None = field(default=None, init=False, repr=False)
+    _last: tuple[float, float] | None = field(default=None, init=False, repr=False)  # the last decision's x, y
+
+    def reset(self, context: RaceContext) -> None:
+        """The shield of this race's kart."""
+        self._shield = SideRoomShield.of(context.kart, clearance=self.clearance)
+        self._track = context.track
+        self._last = None
+
+    def apply(self, action: Action, observation: Observation) -> Action:
+        """``action`` with its steer changed when it would move the kart into one alongside."""
+        assert self._shield is not None and self._track is not None, "reset() first"
+        me = observation.me
+        course = me.heading
+        if self._last is not None:
+            dx, dy = me.x - self._last[0], me.y - self._last[1]
+            if dx * dx + dy * dy > 1e-4:  # moved a centimetre: its direction is the course (heading + slip)
+                course = math.atan2(dy, dx)
+        self._last = (me.x, me.y)
+        return self._shield.limit(action, me, course, observation.karts, self._track)
+
+    @property
+    def took_over(self) -> bool:
+        """Never: the policy keeps its pedal, and its steer where it leaves room."""
         return False
 
 
