@@ -5,10 +5,10 @@ The referee charges a contact between karts alongside to each kart that was movi
 eight, steer into karts beside them: of 85 collisions at fault in six 8-kart races, 57 were side contacts, most of
 them an RL kart's. :class:`SideRoomShield` bounds the ego's course against the track: with a kart within
 ``reach`` along the track and ``zone`` across, the ego's own sideways speed toward it may be at most the speed from
-which turning away at a share of the tyres' grip leaves ``closing_speed`` (half the referee's threshold) at
-``clearance`` across (centre to centre). A steer that would take the course past that bound within ``settle_time``
-is replaced by the steer that reaches the bound; the pedal stays the policy's. A kart on each side: hold the
-track's direction.
+which turning away at a share of the tyres' grip stops closing at ``clearance`` across (centre to centre; the
+referee charges a sideways speed over 0.3 m/s). A steer that would take the course past that bound within
+``settle_time`` is replaced by the steer that reaches the bound; the pedal stays the policy's. A kart on each
+side: hold the track's direction.
 
 The ego's course (heading plus slip: the direction it travels, which the referee judges) is not observed: it is
 measured from the kart's displacement since the shield's previous decision.
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 from controllers.base import Action
 from sim_core.observation import KartView
-from sim_core.params import GRAVITY, KartParams, RuleParams
+from sim_core.params import GRAVITY, KartParams
 from sim_core.track import Track
 
 
@@ -43,28 +43,22 @@ class SideRoomShield:
     lateral_grip: float  # [m/s^2] the fresh tyres' lateral limit: the sharpest course change a steer can make
     reach: float = 4.0  # [m] centres closer than this along the track: alongside or about to be
     zone: float = 5.0  # [m] ... and closer than this across
-    clearance: float = 1.1  # [m] the centre-to-centre gap across at which the ego's sideways speed is down to...
-    closing_speed: float = 0.15  # [m/s] ... this toward the kart (the referee's fault threshold: 0.3)
+    clearance: float = 1.1  # [m] the centre-to-centre gap across the ego closes no further (a body width: 0.9)
     lateral_use: float = 0.4  # the share of the fresh tyres' grip the ego plans to turn away with
     settle_time: float = 0.2  # [s] how far ahead the course under the policy's steer is judged
+    response_time: float = 0.1  # [s] over which a course outside the bounds is brought back
+    turn_use: float = 0.8  # the share of the fresh tyres' grip it turns back with at most
 
     @classmethod
-    def of(cls, kart: KartParams, rules: RuleParams | None = None, clearance: float = 1.1) -> SideRoomShield:
-        """The shield for ``kart``; its closing speed at the clearance half the referee's fault threshold."""
-        rules = rules or RuleParams()
-        return cls(
-            kart.wheelbase,
-            kart.max_steer_angle,
-            kart.lateral_g_fresh * GRAVITY,
-            clearance=clearance,
-            closing_speed=0.5 * rules.lateral_fault_speed,
-        )
+    def of(cls, kart: KartParams, clearance: float = 1.1) -> SideRoomShield:
+        """The shield for ``kart``."""
+        return cls(kart.wheelbase, kart.max_steer_angle, kart.lateral_g_fresh * GRAVITY, clearance=clearance)
 
     def closing_limit(self, across: float) -> float:
         """The ego's highest sideways speed [m/s] toward a kart ``across`` [m] away (centre to centre): the speed
-        from which turning away at ``lateral_use`` of the grip leaves ``closing_speed`` at the clearance."""
+        from which turning away at ``lateral_use`` of the grip stops closing at the clearance (none inside it)."""
         room = max(abs(across) - self.clearance, 0.0)
-        return math.sqrt(self.closing_speed**2 + 2.0 * self.lateral_use * self.lateral_grip * room)
+        return math.sqrt(2.0 * self.lateral_use * self.lateral_grip * room)
 
     def bounds(self, me: KartView, others: Iterable[KartView], track: Track) -> CourseBounds | None:
         """The course the ego may hold against the track's direction; None with nobody alongside."""
@@ -105,12 +99,18 @@ class SideRoomShield:
         track_turn = math.remainder(heading_then - track_heading, math.tau)
         relative = math.remainder(course - track_heading, math.tau)
         then = relative + self._course_turn(action.steer, me.speed) * self.settle_time - track_turn
-        if bounds.low <= then <= bounds.high:
+        if bounds.low <= then <= bounds.high and bounds.low <= relative <= bounds.high:
             return action
         target = min(max(then, bounds.low), bounds.high)
-        # the course turn rate that lands on the bound, and the steer of the steady bicycle that turns so
-        rate = (target - relative + track_turn) / self.settle_time
-        return Action(self._steer_for(rate, me.speed), action.throttle)
+        # the course turn rate that brings the course to the bound within the response time (on top of the
+        # track's own turn), at most ``turn_use`` of the grip; then the steer of the steady bicycle that turns so
+        rate = (target - relative) / self.response_time + track_turn / self.settle_time
+        most = self.turn_use * self.lateral_grip / me.speed
+        steer = self._steer_for(min(max(rate, -most), most), me.speed)
+        # never toward the bound's side beyond what the policy asked; the pedal stays the policy's (braking as well
+        # was tried: in 8-kart fields it traded side contacts for rear-end ones behind the braking kart)
+        away = min(steer, action.steer) if then > bounds.high else max(steer, action.steer)
+        return Action(away, action.throttle)
 
     def _course_turn(self, steer: float, speed: float) -> float:
         """The course's turn rate [rad/s] a steady ``steer`` gives at ``speed`` (the tyres' limit included)."""
