@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from arena.field import FieldFigures, FieldSpec, field_figures, row_effect, slot_wins
+from arena.field_compare import PairedChange, baseline_section, change_json, field_races, paired_changes
 from arena.intervals import Interval
 from arena.manifest import build_manifest, describe_agent, source_commit, time_limit_of
 from arena.race import FinishedRace
@@ -69,9 +70,16 @@ def _per_track(spec: FieldSpec, races: Sequence[RaceFigures]) -> dict[str, list[
     return {track: [r for r in races if track in (COMBINED, r.track)] for track in (*spec.tracks, COMBINED)}
 
 
-def field_findings(spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float) -> str:
-    """The study's README."""
+def field_findings(
+    spec: FieldSpec,
+    races: Sequence[RaceFigures],
+    wall_s: float,
+    baseline: tuple[Path, Sequence[PairedChange]] | None = None,
+) -> str:
+    """The study's README (``baseline``: the study it was raced against, and the paired changes)."""
     agents = "" if spec.agents == tuple(PAPER_AGENTS) else f" --agents {','.join(spec.agents)}"
+    if baseline is not None:
+        agents += f" --baseline {baseline[0]}"
     lines = [
         f"# Fields: {'the five' if not agents else len(spec.agents)} agents in {spec.field_size}-kart free-for-all "
         "races",
@@ -101,6 +109,8 @@ def field_findings(spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float)
         lines += _track_section(track, subset)
     lines += _slot_section(races, spec.field_size)
     lines += _row_section(races)
+    if baseline is not None:
+        lines += baseline_section(*baseline)
     return "\n".join(lines)
 
 
@@ -210,13 +220,20 @@ def field_json(spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float) -> 
     }
 
 
-def write_field(out: Path, spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float) -> None:
-    """``OUT/README.md``, ``OUT/field.json`` and ``OUT/manifest.json``."""
+def write_field(
+    out: Path, spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float, baseline: Path | None = None
+) -> None:
+    """``OUT/README.md``, ``OUT/field.json`` and ``OUT/manifest.json``; with ``baseline`` (a study of the same
+    schedule: its folder or ``field.json``) each agent's collisions paired race by race against it too."""
     # the manifest first: the files written here are tracked, and would otherwise count as changed code
     manifest = build_manifest("field", [describe_agent(a) for a in spec.agents], "paper", spec.to_json())
+    compared = None if baseline is None else (baseline, paired_changes(field_races(baseline), races))
+    data = field_json(spec, races, wall_s)
+    if compared is not None:
+        data["baseline"] = {"study": str(baseline), "changes": [change_json(c) for c in compared[1]]}
     out.mkdir(parents=True, exist_ok=True)
-    (out / "README.md").write_text(field_findings(spec, races, wall_s))
-    (out / "field.json").write_text(json.dumps(field_json(spec, races, wall_s), indent=1) + "\n")
+    (out / "README.md").write_text(field_findings(spec, races, wall_s, compared))
+    (out / "field.json").write_text(json.dumps(data, indent=1) + "\n")
     (out / "manifest.json").write_text(json.dumps(manifest.to_json(), indent=1) + "\n")
 
 

@@ -91,23 +91,35 @@ def field(
     workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per CPU)")] = None,
     out: Annotated[Path, typer.Option(help="the field results folder")] = Path("docs/results/field"),
     agents: Annotated[str | None, typer.Option(help="agents, comma separated (default: the paper's five)")] = None,
+    baseline: Annotated[
+        Path | None,
+        typer.Option(help="a study of the same schedule (its folder): each agent's collisions paired against it"),
+    ] = None,
 ) -> None:
     """Race the five agents (or AGENTS) in 8-kart free-for-all fields (oval, complex, brands-hatch; varied
     conditions, each kart finishing after the same distance from its slot) and write each agent's finish rate,
-    safety per kart-race and rating into OUT/ (README.md, field.json, manifest)."""
+    safety per kart-race and rating into OUT/ (README.md, field.json, manifest); with BASELINE, each agent's
+    collisions race by race against the agent in its slots there."""
+    from arena.field_compare import field_races
     from arena.reproduce import PAPER_AGENTS
     from arena.reproduce_field import field_spec, run_field, write_field
 
     try:
         spec = field_spec(races, seed, tuple(agents.split(",")) if agents else PAPER_AGENTS)
-    except ValueError as exc:
-        error(str(exc))
+        if baseline is not None:
+            field_races(baseline)  # readable before hours of racing
+    except (KeyError, ValueError, OSError) as exc:
+        error(str(exc).strip("'\""))
         raise typer.Exit(2) from None
     console.print(f"field: {spec.total} races of {spec.field_size} karts")
     started = time.perf_counter()
     done = run_field(spec, workers, on_race=lambda n, total: console.print(f"{n}/{total}", end="\r"))
     wall = time.perf_counter() - started
-    write_field(out, spec, done, wall)
+    try:
+        write_field(out, spec, done, wall, baseline)
+    except ValueError as exc:  # a baseline of another schedule: the study is still written, without it
+        error(f"{exc}; written without the baseline")
+        write_field(out, spec, done, wall)
     console.print(f"wrote {out}/ ({wall / 60:.1f} min)")
 
 

@@ -12,7 +12,7 @@ import pytest
 
 from arena.field import FieldSpec, field_figures, places, row_effect, slot_wins
 from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures
-from arena.reproduce_field import run_field, write_field
+from arena.reproduce_field import field_spec, run_field, write_field
 
 FIVE = ("mcts-rl", "e2e", "fixed-rl", "mcts-lqng", "fixed-lqng")
 
@@ -111,6 +111,13 @@ def test_the_row_effect_pairs_each_kart_with_itself_from_the_other_row() -> None
     assert row_effect(one_row) is None  # a pair, but no kart changes rows
 
 
+def test_the_study_races_the_paper_agents_unless_told_others() -> None:
+    assert field_spec(2).agents == FIVE
+    assert field_spec(2, agents=("e2e-shielded", "mcts-lqng")).agents == ("e2e-shielded", "mcts-lqng")
+    with pytest.raises(KeyError, match="nobody"):
+        field_spec(2, agents=("nobody", "mcts-lqng"))
+
+
 def test_a_tiny_study_runs_in_worker_processes_and_is_written_out(tmp_path: Path) -> None:
     spec = FieldSpec(("lane-follower", "fixed-lqng"), ("oval",), field_size=5, races_per_track=2, time_limit=6.0)
     races = run_field(spec.validate(), workers=2)
@@ -123,5 +130,10 @@ def test_a_tiny_study_runs_in_worker_processes_and_is_written_out(tmp_path: Path
     assert json.loads((tmp_path / "manifest.json").read_text())["kind"] == "field"
     readme = (tmp_path / "README.md").read_text()
     assert "| fixed-lqng |" in readme and "Wins by grid slot" in readme and "The front row, paired" in readme
+    assert "--agents lane-follower,fixed-lqng" in readme  # the command that regenerates a study of other agents
+    write_field(tmp_path / "again", spec, races, 1.0, baseline=tmp_path)  # against itself: no change
+    again = json.loads((tmp_path / "again" / "field.json").read_text())
+    assert [c["change"] for c in again["baseline"]["changes"]] == [0.0, 0.0]
+    assert f"--baseline {tmp_path}" in (tmp_path / "again" / "README.md").read_text()
     assert data["row_effect"]["pairs"] == 1 and races[0].seed == races[1].seed
     assert row_effect(races[:1]) is None
