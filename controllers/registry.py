@@ -49,7 +49,7 @@ from controllers.base import Controller
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController, LaneFollowerParams
-from controllers.lq.presets import fixed_line_tracker, mcts_tracker
+from controllers.lq.presets import FIXED_LINE_TRAFFIC_RULES, fixed_line_tracker, mcts_tracker
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
 from controllers.rl.agents import (
     E2EParams,
@@ -174,6 +174,12 @@ def _fixed_lqng(params: FixedLQNGParams) -> Controller:
     return HierarchicalController("fixed-lqng", planner, tracker)
 
 
+def _fixed_lqng_traffic_rules(params: FixedLQNGParams) -> Controller:
+    planner = FixedLinePlanner(margin=params.line_margin_m)
+    tracker = fixed_line_tracker(params.lqng_horizon_steps, params.speed_scale, FIXED_LINE_TRAFFIC_RULES)
+    return HierarchicalController("fixed-lqng-traffic-rules", planner, tracker)
+
+
 _SPECS: tuple[ControllerSpec[Any], ...] = (
     _spec(
         "mcts-lqng",
@@ -192,6 +198,13 @@ _SPECS: tuple[ControllerSpec[Any], ...] = (
         "fixed-lqng",
         "The offline optimised racing line tracked by the LQ Nash game tracker (50 Hz).",
         _fixed_lqng,
+        FixedLQNGParams,
+    ),
+    _spec(
+        "fixed-lqng-traffic-rules",
+        "fixed-lqng held to mcts-lqng's rules of the road: the lanes its lane changes reach, room for a kart "
+        "alongside, station behind a kart ahead, a faster kart let in.",
+        _fixed_lqng_traffic_rules,
         FixedLQNGParams,
     ),
     _spec(
