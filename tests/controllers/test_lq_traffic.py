@@ -1,6 +1,7 @@
 """The LQNG tracker's traffic rules (controllers/lq/traffic.py), each alone on placed karts with hand-checked
 numbers: station keeping (linear and Gipps), yielding, pass detection, the lane-rule guard, the alongside
-discipline, the steer-rate limit, and how the tracker composes them."""
+discipline, the steer-rate limit, and how the tracker composes them; and fixed-lqng under those rules behind two
+slower karts side by side, where the paper's fixed-lqng runs into one."""
 
 from __future__ import annotations
 
@@ -23,6 +24,7 @@ from controllers.lq.traffic import (
     Yield,
 )
 from controllers.plan import Plan, Waypoint
+from controllers.race import Placement, RaceSpec, run_race
 from controllers.racing_line import optimise_racing_line
 from sim_core import state as st
 from sim_core.observation import KartView, observe
@@ -317,3 +319,19 @@ def test_a_kart_cutting_in_is_let_in_and_without_the_yield_the_follower_hits_it(
     without = tuple(rule for rule in MCTS_TRAFFIC if not isinstance(rule, Yield))
     assert _cut_in(MCTS_TRAFFIC, ahead, across_deg, steer) == [0, 0]
     assert _cut_in(without, ahead, across_deg, steer)[0] == 1
+
+
+@pytest.mark.parametrize("ego_lane", [1, 2])
+def test_under_the_rules_of_the_road_the_fixed_line_keeps_off_two_slower_karts_abreast(ego_lane: int) -> None:
+    """The ego rolls at 10 m/s 8 m behind two karts side by side in lanes 1 and 2 of the oval's straight, both at
+    pace 0.8. The paper's fixed-lqng (its LQ game and no traffic rules) runs into one of them, at fault;
+    ``fixed-lqng-traffic-rules`` keeps station, then passes, untouched."""
+
+    def faults(ego: str) -> int:
+        placements = (Placement(5.0, ego_lane, 10.0), Placement(13.0, 1, 10.0), Placement(13.0, 2, 10.0))
+        leaders = ("lane-follower@0.8", "lane-follower@0.8")
+        spec = RaceSpec(track="oval", controllers=(ego, *leaders), time_limit=15.0, placements=placements)
+        return run_race(spec).result.karts[0].collisions_at_fault
+
+    assert faults("fixed-lqng") >= 1
+    assert faults("fixed-lqng-traffic-rules") == 0
