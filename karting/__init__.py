@@ -4,3 +4,5 @@ drivers (:mod:`controllers`) and the race server (:mod:`server`, :mod:`web`).
 Nothing imports this package (``tests/test_layering.py`` checks it); it is the one place allowed to know every
 layer. Run it as ``karting ...`` (the console script) or ``python -m karting ...``.
 """
+
+from sim_core import _numeric_target  # noqa: F401  (one x86-64 level for every library: before numpy is imported)

@@ -9,6 +9,8 @@ import sys
 import pytest
 from hypothesis import settings
 
+import sim_core  # noqa: F401  (first: the numeric libraries' x86-64 level is set before they load)
+
 settings.register_profile("project", deadline=None, derandomize=True, print_blob=True)
 settings.load_profile("project")
 
