@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from arena.manifest import describe_agent
 from arena.publish import published_problems
 from arena.reproduce import reproduction_problems, stale_conditions
 
@@ -45,3 +46,18 @@ def test_every_other_published_tournament_is_of_the_current_agents_and_condition
         problems += [f"{folder}: {p}" for p in published_problems(folder, None)]
         problems += [f"{folder}: {p}" for p in stale_conditions(folder, conditions)]
     assert problems == [], "stale published tournaments:\n" + "\n".join(problems)
+
+
+def test_every_published_field_study_is_of_the_current_agents() -> None:
+    """A field study (``karting reproduce field``) records each agent with every parameter and its weights: each
+    must describe the same agent today. (Its manifest names its condition set without the set's values, so a
+    changed set is not caught here.)"""
+    folders = [m.parent for m in sorted(RESULTS.rglob("manifest.json")) if json.loads(m.read_text())["kind"] == "field"]
+    assert folders, "no published field study found: the check would pass on nothing"
+    problems = []
+    for folder in folders:
+        manifest = json.loads((folder / "manifest.json").read_text())
+        for recorded in manifest["agents"]:
+            if describe_agent(recorded["agent"]).to_json() != recorded:
+                problems.append(f"{folder}: {recorded['agent']} is no longer the agent it raced: race it again")
+    assert problems == [], "stale field studies:\n" + "\n".join(problems)
