@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from statistics import fmean
 
-from arena.intervals import Interval, bootstrap_mean
+from arena.intervals import Interval, bootstrap_mean, interval_json
 from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures
 
 
@@ -147,7 +147,6 @@ def baseline_section(baseline: Path, changes: Sequence[PairedChange]) -> list[st
 
 def change_json(change: PairedChange) -> dict[str, object]:
     """One agent's paired change as JSON (the interval as ``[low, high]``)."""
-    ci = change.change_ci95
     return {
         "agent": change.agent,
         "baseline_agent": change.baseline_agent,
@@ -155,7 +154,7 @@ def change_json(change: PairedChange) -> dict[str, object]:
         "baseline_collisions_at_fault": change.baseline_collisions,
         "collisions_at_fault": change.collisions,
         "change": change.change,
-        "change_ci95": None if ci is None else [ci.low, ci.high],
+        "change_ci95": interval_json(change.change_ci95),
         "baseline_time": change.baseline_time,
         "time": change.time,
     }

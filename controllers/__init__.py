@@ -1,6 +1,3 @@
 """Drivers: the controller Protocol and registry, planners, trackers and headless races."""
 
-from sim_core import (
-    _jit_cache,  # noqa: F401  (must configure numba's cache before numba is imported)
-    _numeric_target,  # noqa: F401  (one x86-64 level for every library: before numpy is imported)
-)
+from sim_core import _jit_cache  # noqa: F401  (numba's cache and, by sim_core's import, the numeric x86-64 level)

@@ -48,9 +48,8 @@ LOOKAHEAD_HELP = (
 )
 LINE_MARGIN_HELP = "how far the planner's racing line keeps inside the walls"
 SIDE_CLEARANCE_HELP = (
-    "the gap across, centre to centre, to a kart alongside at which the kart's own sideways speed toward it is down "
-    "to half the referee's fault threshold; it turns away before (ours, not the paper's: "
-    "controllers.rl.filters.GiveRoomAlongside)"
+    "the gap across, centre to centre, to a kart alongside that the kart's own sideways motion closes no further; "
+    "it turns away in time (ours, not the paper's: controllers.rl.filters.GiveRoomAlongside)"
 )
 
 
@@ -160,19 +159,21 @@ def build_mcts_rl_adaptive(params: MCTSRLAdaptiveParams, agent_factory: AgentFac
     return build_mcts_rl(params, "mcts-rl-adaptive", agent_factory)
 
 
-def build_fixed_rl(params: FixedRLParams) -> Controller:
-    """Fixed racing-line planner + RL tracker."""
+def build_fixed_rl(
+    params: FixedRLParams, name: str = "fixed-rl", filters: tuple[ActionFilter, ...] | None = None
+) -> Controller:
+    """Fixed racing-line planner + RL tracker (``filters``: the tracker's action filters, by default
+    ``fixed-rl``'s)."""
     planner = FixedLinePlanner(margin=params.line_margin_m)
-    filters = _rl_filters(params.line_margin_m, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
-    return HierarchicalController("fixed-rl", planner, RLTracker("fixed-rl", filters=filters), rate_hz=RL_RATE_HZ)
+    if filters is None:
+        filters = _rl_filters(params.line_margin_m, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
+    return HierarchicalController(name, planner, RLTracker("fixed-rl", filters=filters), rate_hz=RL_RATE_HZ)
 
 
 def build_fixed_rl_side_room(params: FixedRLSideRoomParams) -> Controller:
     """``fixed-rl`` whose tracker gives a kart alongside room (:class:`GiveRoomAlongside`)."""
-    planner = FixedLinePlanner(margin=params.line_margin_m)
     margins = (params.line_margin_m, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
-    tracker = RLTracker("fixed-rl", filters=_side_room_filters(*margins, params.side_clearance_m))
-    return HierarchicalController("fixed-rl-side-room", planner, tracker, rate_hz=RL_RATE_HZ)
+    return build_fixed_rl(params, "fixed-rl-side-room", _side_room_filters(*margins, params.side_clearance_m))
 
 
 class E2EController:
