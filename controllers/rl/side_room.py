@@ -109,7 +109,8 @@ class SideRoomShield:
         steer = self._steer_for(min(max(rate, -most), most), me.speed)
         # never toward the bound's side beyond what the policy asked; the pedal stays the policy's (braking as well
         # was tried: in 8-kart fields it traded side contacts for rear-end ones behind the braking kart)
-        away = min(steer, action.steer) if then > bounds.high else max(steer, action.steer)
+        over_high = then > bounds.high or (then >= bounds.low and relative > bounds.high)
+        away = min(steer, action.steer) if over_high else max(steer, action.steer)
         return Action(away, action.throttle)
 
     def _course_turn(self, steer: float, speed: float) -> float:
