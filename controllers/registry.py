@@ -53,19 +53,19 @@ from controllers.lq.presets import FIXED_LINE_TRAFFIC_RULES, fixed_line_tracker,
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
 from controllers.rl.agents import (
     E2EParams,
-    E2EShieldedParams,
+    E2ETrafficRulesParams,
     FixedRLParams,
-    FixedRLSideRoomParams,
+    FixedRLTrafficRulesParams,
     MCTSRLAdaptiveParams,
     MCTSRLParams,
-    MCTSRLSideRoomParams,
+    MCTSRLTrafficRulesParams,
     build_e2e,
-    build_e2e_shielded,
+    build_e2e_traffic_rules,
     build_fixed_rl,
-    build_fixed_rl_side_room,
+    build_fixed_rl_traffic_rules,
     build_mcts_rl,
     build_mcts_rl_adaptive,
-    build_mcts_rl_side_room,
+    build_mcts_rl_traffic_rules,
 )
 from controllers.tactical.high_level import HOLD_GAIN, AdaptiveOpponentParams, MCTSPlanner, TacticalParams
 from sim_core.params import MIN_PACE
@@ -239,24 +239,25 @@ _SPECS: tuple[ControllerSpec[Any], ...] = (
         E2EParams,
     ),
     _spec(
-        "mcts-rl-side-room",
-        "mcts-rl whose tracker never moves sideways into a kart alongside faster than the referee allows (it "
-        "turns away in time).",
-        build_mcts_rl_side_room,
-        MCTSRLSideRoomParams,
+        "mcts-rl-traffic-rules",
+        "mcts-rl whose tracker keeps to the lanes its spent lane changes leave on a straight and never moves "
+        "sideways into a kart alongside faster than the referee allows (it turns away in time).",
+        build_mcts_rl_traffic_rules,
+        MCTSRLTrafficRulesParams,
     ),
     _spec(
-        "fixed-rl-side-room",
-        "fixed-rl whose tracker never moves sideways into a kart alongside faster than the referee allows.",
-        build_fixed_rl_side_room,
-        FixedRLSideRoomParams,
+        "fixed-rl-traffic-rules",
+        "fixed-rl whose tracker keeps to the lanes its spent lane changes leave on a straight and never moves "
+        "sideways into a kart alongside faster than the referee allows.",
+        build_fixed_rl_traffic_rules,
+        FixedRLTrafficRulesParams,
     ),
     _spec(
-        "e2e-shielded",
-        "e2e held to the hierarchical RL agents' traffic shields: it keeps its distance to a kart ahead in its "
-        "path and gives room to one alongside.",
-        build_e2e_shielded,
-        E2EShieldedParams,
+        "e2e-traffic-rules",
+        "e2e held to the hierarchical RL agents' traffic rules: it keeps its distance to a kart ahead in its path, "
+        "to the lanes its spent lane changes leave, and gives room to one alongside.",
+        build_e2e_traffic_rules,
+        E2ETrafficRulesParams,
     ),
 )
 

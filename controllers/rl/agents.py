@@ -28,7 +28,13 @@ from controllers.base import Action, ActionFilter, Controller, RaceContext
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.parameters import parameter
-from controllers.rl.filters import GiveRoomAlongside, KeepDistance, LineSpeedCeiling, RecoverFromStall
+from controllers.rl.filters import (
+    GiveRoomAlongside,
+    KeepDistance,
+    KeepToLaneLimit,
+    LineSpeedCeiling,
+    RecoverFromStall,
+)
 from controllers.rl.tracker import RLTracker
 from controllers.tactical.high_level import AdaptiveOpponentParams, MCTSPlanner, TacticalParams
 from controllers.tactical.opponents import AgentFactory
@@ -47,6 +53,10 @@ LOOKAHEAD_HELP = (
     "controllers.rl.filters.KeepDistance)"
 )
 LINE_MARGIN_HELP = "how far the planner's racing line keeps inside the walls"
+LANE_LIMIT_MARGIN_HELP = (
+    "on a straight whose lane changes are spent, how far short of where the referee would count another change the "
+    "kart's sideways motion stops (ours, not the paper's: controllers.rl.filters.KeepToLaneLimit)"
+)
 SIDE_CLEARANCE_HELP = (
     "the gap across, centre to centre, to a kart alongside that the kart's own sideways motion closes no further; "
     "it turns away in time (ours, not the paper's: controllers.rl.filters.GiveRoomAlongside)"
@@ -74,10 +84,17 @@ class MCTSRLAdaptiveParams(MCTSRLParams, AdaptiveOpponentParams):
 
 
 @dataclass(frozen=True)
-class MCTSRLSideRoomParams(MCTSRLParams):
-    """Public parameters of ``mcts-rl-side-room``: ``mcts-rl``'s and the room it gives a kart alongside."""
+class TrafficRuleParams:
+    """Public parameters of an RL agent's traffic rules: the room it gives a kart alongside and the lanes it keeps
+    to once a straight's lane changes are spent."""
 
     side_clearance_m: float = parameter(1.1, SIDE_CLEARANCE_HELP, unit="m", minimum=0.9, maximum=3.0)
+    lane_limit_margin_m: float = parameter(0.15, LANE_LIMIT_MARGIN_HELP, unit="m", minimum=0.0, maximum=0.5)
+
+
+@dataclass(frozen=True)
+class MCTSRLTrafficRulesParams(MCTSRLParams, TrafficRuleParams):
+    """Public parameters of ``mcts-rl-traffic-rules``: ``mcts-rl``'s and its traffic rules'."""
 
 
 @dataclass(frozen=True)
@@ -90,10 +107,8 @@ class FixedRLParams:
 
 
 @dataclass(frozen=True)
-class FixedRLSideRoomParams(FixedRLParams):
-    """Public parameters of ``fixed-rl-side-room``: ``fixed-rl``'s and the room it gives a kart alongside."""
-
-    side_clearance_m: float = parameter(1.1, SIDE_CLEARANCE_HELP, unit="m", minimum=0.9, maximum=3.0)
+class FixedRLTrafficRulesParams(FixedRLParams, TrafficRuleParams):
+    """Public parameters of ``fixed-rl-traffic-rules``: ``fixed-rl``'s and its traffic rules'."""
 
 
 @dataclass(frozen=True)
@@ -106,12 +121,10 @@ class E2EParams:
 
 
 @dataclass(frozen=True)
-class E2EShieldedParams(E2EParams):
-    """Public parameters of ``e2e-shielded``: ``e2e``'s and the two traffic shields of the hierarchical RL
-    agents."""
+class E2ETrafficRulesParams(E2EParams, TrafficRuleParams):
+    """Public parameters of ``e2e-traffic-rules``: ``e2e``'s, the distance it keeps and its traffic rules'."""
 
     keep_distance_lookahead_s: float = parameter(0.8, LOOKAHEAD_HELP, unit="s", minimum=0.0, maximum=2.0)
-    side_clearance_m: float = parameter(1.1, SIDE_CLEARANCE_HELP, unit="m", minimum=0.9, maximum=3.0)
 
 
 def _rl_filters(line_margin: float, ceiling_margin: float, lookahead: float) -> tuple[ActionFilter, ...]:
@@ -119,12 +132,18 @@ def _rl_filters(line_margin: float, ceiling_margin: float, lookahead: float) -> 
     return (LineSpeedCeiling(ceiling_margin, line_margin), KeepDistance(lookahead), RecoverFromStall())
 
 
-def _side_room_filters(
-    line_margin: float, ceiling_margin: float, lookahead: float, clearance: float
+def _traffic_rules(rules: TrafficRuleParams) -> tuple[ActionFilter, ...]:
+    """An RL agent's sideways traffic rules: the lanes its spent lane changes leave, then room for a kart alongside
+    (last: where the two disagree, the room alongside wins)."""
+    return (KeepToLaneLimit(rules.lane_limit_margin_m), GiveRoomAlongside(rules.side_clearance_m))
+
+
+def _traffic_rule_filters(
+    line_margin: float, ceiling_margin: float, lookahead: float, rules: TrafficRuleParams
 ) -> tuple[ActionFilter, ...]:
-    """The hierarchical RL agent's filters with room given to a kart alongside before the stall recovery."""
+    """The hierarchical RL agent's filters with its traffic rules before the stall recovery."""
     ceiling, keep, recover = _rl_filters(line_margin, ceiling_margin, lookahead)
-    return (ceiling, keep, GiveRoomAlongside(clearance), recover)
+    return (ceiling, keep, *_traffic_rules(rules), recover)
 
 
 def build_mcts_rl(
@@ -148,10 +167,11 @@ def build_mcts_rl(
     return HierarchicalController(name, planner, RLTracker("mcts-rl", filters=filters), rate_hz=RL_RATE_HZ)
 
 
-def build_mcts_rl_side_room(params: MCTSRLSideRoomParams) -> Controller:
-    """``mcts-rl`` whose tracker gives a kart alongside room (:class:`GiveRoomAlongside`)."""
+def build_mcts_rl_traffic_rules(params: MCTSRLTrafficRulesParams) -> Controller:
+    """``mcts-rl`` whose tracker keeps to the lanes its lane changes leave (:class:`KeepToLaneLimit`) and gives a
+    kart alongside room (:class:`GiveRoomAlongside`)."""
     margins = (1.0, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
-    return build_mcts_rl(params, "mcts-rl-side-room", filters=_side_room_filters(*margins, params.side_clearance_m))
+    return build_mcts_rl(params, "mcts-rl-traffic-rules", filters=_traffic_rule_filters(*margins, params))
 
 
 def build_mcts_rl_adaptive(params: MCTSRLAdaptiveParams, agent_factory: AgentFactory) -> Controller:
@@ -170,10 +190,11 @@ def build_fixed_rl(
     return HierarchicalController(name, planner, RLTracker("fixed-rl", filters=filters), rate_hz=RL_RATE_HZ)
 
 
-def build_fixed_rl_side_room(params: FixedRLSideRoomParams) -> Controller:
-    """``fixed-rl`` whose tracker gives a kart alongside room (:class:`GiveRoomAlongside`)."""
+def build_fixed_rl_traffic_rules(params: FixedRLTrafficRulesParams) -> Controller:
+    """``fixed-rl`` whose tracker keeps to the lanes its lane changes leave (:class:`KeepToLaneLimit`) and gives a
+    kart alongside room (:class:`GiveRoomAlongside`)."""
     margins = (params.line_margin_m, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
-    return build_fixed_rl(params, "fixed-rl-side-room", _side_room_filters(*margins, params.side_clearance_m))
+    return build_fixed_rl(params, "fixed-rl-traffic-rules", _traffic_rule_filters(*margins, params))
 
 
 class E2EController:
@@ -205,12 +226,9 @@ def build_e2e(params: E2EParams) -> Controller:
     return E2EController(deterministic=params.deterministic, filters=(RecoverFromStall(),))
 
 
-def build_e2e_shielded(params: E2EShieldedParams) -> Controller:
-    """The end-to-end agent held to the hierarchical RL agents' traffic shields: the distance kept to a kart
-    ahead in its path and the room given to one alongside (no speed ceiling: that is a planner's line)."""
-    filters = (
-        KeepDistance(params.keep_distance_lookahead_s),
-        GiveRoomAlongside(params.side_clearance_m),
-        RecoverFromStall(),
-    )
-    return E2EController(deterministic=params.deterministic, filters=filters, name="e2e-shielded")
+def build_e2e_traffic_rules(params: E2ETrafficRulesParams) -> Controller:
+    """The end-to-end agent held to the hierarchical RL agents' traffic rules: the distance kept to a kart ahead
+    in its path, the lanes its lane changes leave and the room given to one alongside (no speed ceiling: that is
+    a planner's line)."""
+    filters = (KeepDistance(params.keep_distance_lookahead_s), *_traffic_rules(params), RecoverFromStall())
+    return E2EController(deterministic=params.deterministic, filters=filters, name="e2e-traffic-rules")

@@ -6,7 +6,9 @@
 * :class:`KeepDistance` — never closing on a kart ahead in the path faster than braking could still meet it
   short of the rules' buffer (:class:`~controllers.rl.shield.FollowingShield`);
 * :class:`GiveRoomAlongside` — never moving sideways into a kart alongside faster than the referee lets a kart
-  alongside move (:class:`~controllers.rl.side_room.SideRoomShield`);
+  alongside move (:class:`~controllers.rl.sideways.SideRoomShield`);
+* :class:`KeepToLaneLimit` — never crossing into a lane the lane-change rule no longer allows on this straight
+  (:class:`~controllers.rl.sideways.LaneLimitShield`);
 * :class:`RecoverFromStall` — a stalled kart drives off (or backs off a wall) for 1 s, and the policy never
   reverses on its own (:class:`~controllers.rl.recovery.StallRecovery`).
 """
@@ -18,9 +20,10 @@ from dataclasses import dataclass, field
 
 from controllers.base import Action, RaceContext
 from controllers.racing_line import optimise_racing_line
+from controllers.rl.course import CourseBounds, CourseSteer
 from controllers.rl.recovery import StallRecovery
 from controllers.rl.shield import FollowingShield, LineSpeedShield
-from controllers.rl.side_room import SideRoomShield
+from controllers.rl.sideways import LaneLimitShield, SideRoomShield
 from sim_core.observation import Observation
 from sim_core.track import Track
 
@@ -76,25 +79,23 @@ class KeepDistance:
         return False
 
 
-@dataclass
-class GiveRoomAlongside:
-    """Steer no further toward a kart alongside than closes the gap across to ``clearance`` [m] (centre to
-    centre); the course is measured from the kart's displacement between decisions."""
+class _CourseFilter:
+    """What the sideways filters share: the kart's course (heading plus slip, the direction it travels, which the
+    referee judges) measured from its displacement since the previous decision, and the steer that keeps it within
+    the shield's bounds (:class:`~controllers.rl.course.CourseSteer`)."""
 
-    clearance: float = 1.1  # [m]
-    _shield: SideRoomShield | None = field(default=None, init=False, repr=False)
-    _track: Track | None = field(default=None, init=False, repr=False)
-    _last: tuple[float, float] | None = field(default=None, init=False, repr=False)  # the last decision's x, y
+    _track: Track | None
+    _last: tuple[float, float] | None  # the last decision's x, y
 
-    def reset(self, context: RaceContext) -> None:
-        """The shield of this race's kart."""
-        self._shield = SideRoomShield.of(context.kart, clearance=self.clearance)
-        self._track = context.track
-        self._last = None
+    def _bounds(self, observation: Observation) -> CourseBounds | None:
+        raise NotImplementedError
+
+    def _steer(self) -> CourseSteer:
+        raise NotImplementedError
 
     def apply(self, action: Action, observation: Observation) -> Action:
-        """``action`` with its steer changed when it would move the kart into one alongside."""
-        assert self._shield is not None and self._track is not None, "reset() first"
+        """``action`` with its steer changed where the course it leads to leaves the shield's bounds."""
+        assert self._track is not None, "reset() first"
         me = observation.me
         course = me.heading
         if self._last is not None:
@@ -102,12 +103,66 @@ class GiveRoomAlongside:
             if dx * dx + dy * dy > 1e-4:  # moved a centimetre: its direction is the course (heading + slip)
                 course = math.atan2(dy, dx)
         self._last = (me.x, me.y)
-        return self._shield.limit(action, me, course, observation.karts, self._track)
+        if me.speed < 1.0:
+            return action
+        bounds = self._bounds(observation)
+        return action if bounds is None else self._steer().limit(action, me, course, bounds, self._track)
 
     @property
     def took_over(self) -> bool:
-        """Never: the policy keeps its pedal, and its steer where it leaves room."""
+        """Never: the policy keeps its pedal, and its steer where the course stays within bounds."""
         return False
+
+
+@dataclass
+class GiveRoomAlongside(_CourseFilter):
+    """Steer no further toward a kart alongside than closes the gap across to ``clearance`` [m] (centre to
+    centre; :class:`~controllers.rl.sideways.SideRoomShield`)."""
+
+    clearance: float = 1.1  # [m]
+    _shield: SideRoomShield | None = field(default=None, init=False, repr=False)
+    _track: Track | None = field(default=None, init=False, repr=False)
+    _last: tuple[float, float] | None = field(default=None, init=False, repr=False)
+
+    def reset(self, context: RaceContext) -> None:
+        """The shield of this race's kart."""
+        self._shield = SideRoomShield.of(context.kart, clearance=self.clearance)
+        self._track = context.track
+        self._last = None
+
+    def _bounds(self, observation: Observation) -> CourseBounds | None:
+        assert self._shield is not None and self._track is not None, "reset() first"
+        return self._shield.bounds(observation.me, observation.karts, self._track)
+
+    def _steer(self) -> CourseSteer:
+        assert self._shield is not None, "reset() first"
+        return self._shield.steer
+
+
+@dataclass
+class KeepToLaneLimit(_CourseFilter):
+    """On a straight whose lane changes are spent, steer no further toward a lane the rule no longer allows than
+    stops ``margin`` [m] short of where the referee would count the change
+    (:class:`~controllers.rl.sideways.LaneLimitShield`)."""
+
+    margin: float = 0.15  # [m]
+    _shield: LaneLimitShield | None = field(default=None, init=False, repr=False)
+    _track: Track | None = field(default=None, init=False, repr=False)
+    _last: tuple[float, float] | None = field(default=None, init=False, repr=False)
+
+    def reset(self, context: RaceContext) -> None:
+        """The shield of this race's kart, track and lane-change limit."""
+        self._shield = LaneLimitShield.of(context.kart, context.track, context.lane_change_limit, self.margin)
+        self._track = context.track
+        self._last = None
+
+    def _bounds(self, observation: Observation) -> CourseBounds | None:
+        assert self._shield is not None and self._track is not None, "reset() first"
+        return self._shield.bounds(observation.me, self._track)
+
+    def _steer(self) -> CourseSteer:
+        assert self._shield is not None, "reset() first"
+        return self._shield.steer
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""The RL tracker's sideways shield (:class:`~controllers.rl.side_room.SideRoomShield`, the
+"""The RL tracker's sideways shield (:class:`~controllers.rl.sideways.SideRoomShield`, the
 :class:`~controllers.rl.filters.GiveRoomAlongside` filter): its closing-speed limit against the hand-worked
 formula, which karts it ignores, that it only ever steers away, and, in the simulator, that a driver steering
 hard into a kart alongside is kept off it and charged nothing, where without the shield it is charged."""
@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from controllers.base import Action, RaceContext
 from controllers.rl.filters import GiveRoomAlongside
-from controllers.rl.side_room import SideRoomShield
+from controllers.rl.sideways import SideRoomShield
 from sim_core.observation import KartView, observe
 from sim_core.params import GRAVITY, SimParams, kart_preset
 from sim_core.track_io import get_track
@@ -83,7 +83,12 @@ def test_it_only_ever_steers_away_from_the_kart_alongside(
     """The pedal is the policy's; the steer is the policy's or one turning further away from the other kart."""
     me = _view(0, STRAIGHT_S + 10.0, 0.0, speed, heading_offset=drift)
     other = _view(1, STRAIGHT_S + 10.0 + along, across, 12.0)
-    out = SHIELD.limit(Action(steer, throttle), me, me.heading, [me, other], TRACK)
+    bounds = SHIELD.bounds(me, [me, other], TRACK)
+    out = (
+        Action(steer, throttle)
+        if bounds is None
+        else SHIELD.steer.limit(Action(steer, throttle), me, me.heading, bounds, TRACK)
+    )
     assert out.throttle == throttle
     assert -1.0 <= out.steer <= 1.0
     if across > 0.0:  # on the left: never more to the left than the policy asked
