@@ -108,8 +108,13 @@ class FieldSpec:
         return jobs
 
     def to_json(self) -> dict[str, Any]:
-        """Every field (a manifest's record)."""
-        return {**asdict(self), "agents": list(self.agents), "tracks": list(self.tracks)}
+        """Every field (a manifest's record), the conditions with the named set's values."""
+        return {
+            **asdict(self),
+            "agents": list(self.agents),
+            "tracks": list(self.tracks),
+            "conditions": condition_set(self.conditions).to_json(),
+        }
 
 
 @dataclass(frozen=True)

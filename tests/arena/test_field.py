@@ -13,6 +13,7 @@ import pytest
 from arena.field import FieldSpec, field_figures, places, row_effect, slot_wins
 from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures
 from arena.reproduce_field import field_spec, run_field, write_field
+from sim_core.conditions import condition_set
 
 FIVE = ("mcts-rl", "e2e", "fixed-rl", "mcts-lqng", "fixed-lqng")
 
@@ -127,7 +128,9 @@ def test_a_tiny_study_runs_in_worker_processes_and_is_written_out(tmp_path: Path
     data = json.loads((tmp_path / "field.json").read_text())
     assert set(data["tracks"]) == {"oval", "combined"} and len(data["races"]) == 2
     assert set(data["tracks"]["oval"]["agents"]) == {"lane-follower", "fixed-lqng"}
-    assert json.loads((tmp_path / "manifest.json").read_text())["kind"] == "field"
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    assert manifest["kind"] == "field"
+    assert manifest["conditions"]["conditions"] == condition_set(spec.conditions).to_json()  # the set's values
     readme = (tmp_path / "README.md").read_text()
     assert "| fixed-lqng |" in readme and "Wins by grid slot" in readme and "The front row, paired" in readme
     assert "--agents lane-follower,fixed-lqng" in readme  # the command that regenerates a study of other agents
