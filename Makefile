@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-$(shell cat pyproject.toml | sha1sum | cut -c1-12)
 
-.PHONY: setup browser compose run test lint bench tracks screenshots clean
+.PHONY: setup browser compose run test lint bench tracks screenshots results clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -37,6 +37,25 @@ lint: setup  ## ruff (rules, complexity limits), ruff format --check, mypy on ev
 
 screenshots: setup browser  ## refresh docs/screenshots/ (the README's pictures) with the real-browser tests
 	KARTING_README_SCREENSHOTS=1 $(BIN)/python -m pytest -q tests/web -k browser
+
+# Every published result in docs/results/, each by the command its README names (about 3 h on the 2-core machine;
+# the tournaments are stored in RESULTS_DB, so an interrupted run resumes them). Run it on a clean checkout: each
+# manifest records the commit.
+RESULTS_DB ?= runs/results.db
+K := $(BIN)/karting
+results: setup  ## regenerate every published result (docs/results/, the README's results block)
+	@mkdir -p $(dir $(RESULTS_DB))
+	$(K) reproduce paper --db $(RESULTS_DB)
+	$(K) reproduce teams --db $(RESULTS_DB)
+	$(K) tournament run --id mcts-lqng-fixed-lqng-vp --agents mcts-lqng,fixed-lqng --tracks oval,complex --races-per-pair 200 --seed 0 --kart paper --conditions varied-pace --db $(RESULTS_DB)
+	$(K) tournament publish mcts-lqng-fixed-lqng-vp --out docs/results/varied-pace/mcts-lqng-fixed-lqng-vp --no-readme --db $(RESULTS_DB)
+	$(K) tournament run --id mcts-rl-fixed-rl-vp --agents mcts-rl,fixed-rl --tracks oval,complex --races-per-pair 200 --seed 0 --kart paper --conditions varied-pace --db $(RESULTS_DB)
+	$(K) tournament publish mcts-rl-fixed-rl-vp --out docs/results/varied-pace/mcts-rl-fixed-rl-vp --no-readme --db $(RESULTS_DB)
+	$(K) reproduce field --races 40 --seed 0
+	$(K) reproduce field --races 40 --seed 0 --agents mcts-rl-traffic-rules,e2e-traffic-rules,fixed-rl-traffic-rules,mcts-lqng,fixed-lqng-traffic-rules --baseline docs/results/field --out docs/results/field-variants
+	$(K) scenarios run --scenarios overtake-straight --egos mcts-lqng,mcts-rl --opponents fixed-lqng,fixed-rl,e2e,mcts-lqng,mcts-rl --tracks oval,complex,brands-hatch --paces 0.95,0.97 --attempts 30 --seed 0 --publish docs/results/scenarios/overtake
+	$(K) scenarios run --scenarios overtake-straight --egos fixed-lqng,fixed-rl --opponents fixed-lqng,fixed-rl,e2e,mcts-lqng,mcts-rl --tracks oval,complex,brands-hatch --paces 0.95,0.97 --attempts 10 --seed 0 --publish docs/results/scenarios/overtake-fixed-line
+	$(K) scenarios run --scenarios defend-straight --egos mcts-lqng,mcts-rl,fixed-lqng,fixed-rl --opponents fixed-lqng,fixed-rl --tracks oval,complex,brands-hatch --attempts 30 --seed 0 --publish docs/results/scenarios/defend
 
 bench: setup
 	$(BIN)/python benchmarks/sim_step.py

@@ -26,6 +26,7 @@ from arena.stats import COMBINED
 from arena.tournament import race_stream
 
 DEFAULT_FIELD_RACES = 40  # per track: eight turns of the five-agent rotation
+DEFAULT_FIELD_OUT = Path("docs/results/field")  # where `karting reproduce field` writes unless told
 # [s] the races' time limit: the rules' 120 s (set for the paper's tracks) ends brands-hatch's three laps of about
 # 40 s before the slower agents finish; a field's finish rate must measure the driving, not the clock
 FIELD_TIME_LIMIT = 240.0
@@ -75,11 +76,15 @@ def field_findings(
     races: Sequence[RaceFigures],
     wall_s: float,
     baseline: tuple[Path, Sequence[PairedChange]] | None = None,
+    out: Path = DEFAULT_FIELD_OUT,
 ) -> str:
-    """The study's README (``baseline``: the study it was raced against, and the paired changes)."""
+    """The study's README (``baseline``: the study it was raced against, and the paired changes; ``out``: where it
+    is written, named in the command that regenerates it unless the default)."""
     agents = "" if spec.agents == tuple(PAPER_AGENTS) else f" --agents {','.join(spec.agents)}"
     if baseline is not None:
         agents += f" --baseline {baseline[0]}"
+    if out != DEFAULT_FIELD_OUT:
+        agents += f" --out {out}"
     lines = [
         f"# Fields: {'the five' if not agents else len(spec.agents)} agents in {spec.field_size}-kart free-for-all "
         "races",
@@ -232,7 +237,7 @@ def write_field(
     if compared is not None:
         data["baseline"] = {"study": str(baseline), "changes": [change_json(c) for c in compared[1]]}
     out.mkdir(parents=True, exist_ok=True)
-    (out / "README.md").write_text(field_findings(spec, races, wall_s, compared))
+    (out / "README.md").write_text(field_findings(spec, races, wall_s, compared, out))
     (out / "field.json").write_text(json.dumps(data, indent=1) + "\n")
     (out / "manifest.json").write_text(json.dumps(manifest.to_json(), indent=1) + "\n")
 
