@@ -28,13 +28,6 @@ class CourseBounds:
     low: float
     high: float
 
-    def within(self, other: CourseBounds | None) -> CourseBounds:
-        """The course both allow; with none, the track's direction (neither side may be approached)."""
-        if other is None:
-            return self
-        low, high = max(self.low, other.low), min(self.high, other.high)
-        return CourseBounds(0.0, 0.0) if low > high else CourseBounds(low, high)
-
 
 @dataclass(frozen=True)
 class CourseSteer:
