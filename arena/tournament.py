@@ -327,14 +327,19 @@ def race_stream(
 def chunks(jobs: Sequence[RaceJob], batch: int, workers: int = 1) -> list[tuple[RaceJob, ...]]:
     """``jobs`` cut into chunks of at most ``batch`` races that share a batch key (track, laps, ...:
     :func:`controllers.race.batch_key`), in schedule order; smaller chunks when there are too few races to keep
-    ``workers`` busy."""
+    ``workers`` busy, and a group's chunks as even as they can be (10 races in at most 8: 5 and 5, not 8 and 2,
+    which left one of two workers idle for most of a small tournament)."""
     if batch < 1:
         raise ValueError(f"batch must be >= 1, got {batch}")
     groups: dict[object, list[RaceJob]] = {}
     for job in jobs:
         groups.setdefault(batch_key(job.spec()), []).append(job)
-    size = max(1, min(batch, -(-len(jobs) // max(1, workers))))
-    return [tuple(group[i : i + size]) for group in groups.values() for i in range(0, len(group), size)]
+    most = max(1, min(batch, -(-len(jobs) // max(1, workers))))
+    cut = []
+    for group in groups.values():
+        size = -(-len(group) // -(-len(group) // most))  # the fewest chunks of at most ``most``, evened out
+        cut += [tuple(group[i : i + size]) for i in range(0, len(group), size)]
+    return cut
 
 
 def _backend_races(

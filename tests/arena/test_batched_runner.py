@@ -88,6 +88,10 @@ def test_chunks_keep_to_one_track_to_their_size_and_to_the_schedule() -> None:
     assert [job for chunk in cut for job in chunk] == jobs
     assert all(len(chunk) <= 5 and len({job.track for job in chunk}) == 1 for chunk in cut)
     assert [len(c) for c in chunks(jobs[:4], 8, workers=2)] == [2, 2]  # both workers get races
+    assert [len(c) for c in cut] == [4, 4, 4, 4, 4, 4]  # 12 races a track in at most 5: three of 4
+    ten_a_track = [job for track in ("oval", "complex") for job in jobs if job.track == track][:10]
+    ten_a_track += [job for job in jobs if job.track == "complex"][:10]
+    assert [len(c) for c in chunks(ten_a_track, 8, workers=2)] == [5, 5, 5, 5]
     with pytest.raises(ValueError, match="batch"):
         chunks(jobs, 0)
 
