@@ -13,6 +13,7 @@ run straight through (every race depends on its job only).
 from __future__ import annotations
 
 import logging
+import math
 import multiprocessing
 import os
 from collections.abc import Callable, Generator, Mapping, Sequence
@@ -337,7 +338,7 @@ def chunks(jobs: Sequence[RaceJob], batch: int, workers: int = 1) -> list[tuple[
     most = max(1, min(batch, -(-len(jobs) // max(1, workers))))
     cut = []
     for group in groups.values():
-        size = -(-len(group) // -(-len(group) // most))  # the fewest chunks of at most ``most``, evened out
+        size = math.ceil(len(group) / math.ceil(len(group) / most))  # the fewest chunks of at most ``most``, even
         cut += [tuple(group[i : i + size]) for i in range(0, len(group), size)]
     return cut
 

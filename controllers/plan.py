@@ -28,31 +28,6 @@ class Plan:
     seconds: float  # [s] wall time of the search
     padded: int = 0  # trailing ego waypoints the search did not reach (the ego holds its lane there): not planned
 
-    def as_dict(self) -> dict[str, object]:
-        """The plan as plain data: what ``dataclasses.asdict`` gives, built directly (a replay records every plan
-        applied; ``asdict``'s generic deep copy was 3% of a tournament race's time)."""
-        return {
-            "ego": self.ego,
-            "root_checkpoint": self.root_checkpoint,
-            "waypoints": {
-                kart: tuple(
-                    {
-                        "checkpoint": w.checkpoint,
-                        "lane": w.lane,
-                        "position": tuple(w.position),
-                        "speed": w.speed,
-                        "time": w.time,
-                    }
-                    for w in waypoints
-                )
-                for kart, waypoints in self.waypoints.items()
-            },
-            "iterations": self.iterations,
-            "nodes": self.nodes,
-            "seconds": self.seconds,
-            "padded": self.padded,
-        }
-
     @property
     def ego_waypoints(self) -> tuple[Waypoint, ...]:
         """The ego kart's waypoints."""

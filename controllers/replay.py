@@ -4,7 +4,7 @@ pose and inputs per step, the plans as they were applied, and the referee's Δr 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -63,7 +63,7 @@ class ReplayRecorder:
 
     def plan(self, step: int, kart: int, plan: Plan) -> None:
         """A plan applied to ``kart`` at race step ``step``."""
-        self._plans.append({"step": step, "kart": kart, "plan": plan.as_dict()})
+        self._plans.append({"step": step, "kart": kart, "plan": asdict(plan)})
 
     def replay(self) -> Replay:
         """The replay so far."""

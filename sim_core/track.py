@@ -206,6 +206,12 @@ class Track:
         round the lap: in [-length / 2, length / 2)."""
         return (s_to - s_from + 0.5 * self.length) % self.length - 0.5 * self.length
 
+    def sample_at(self, s: float) -> int:
+        """The index of the centre-line sample at or before arc length ``s`` [m] in the lap (clamped to the line's
+        samples): the row of :meth:`sample_lane_offsets` the referee's lane membership reads there."""
+        starts = self.segments[0]
+        return min(max(bisect.bisect_right(starts, s) - 1, 0), len(starts) - 1)
+
     def point_at(self, s: float) -> tuple[np.ndarray, np.ndarray]:
         """(position, unit tangent) on the centre line at arc length ``s`` [m] (wraps)."""
         s = s % self.length

@@ -20,7 +20,6 @@ Both only bound the course (:class:`~controllers.rl.course.CourseSteer`); the pe
 
 from __future__ import annotations
 
-import bisect
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -81,7 +80,6 @@ class LaneLimitShield:
 
     steer: CourseSteer
     lane_offsets: np.ndarray = field(repr=False)  # (M, lanes) every centre-line sample's lane offsets (the referee's)
-    centre_s: tuple[float, ...] = field(repr=False)  # [m] every centre-line sample's progress
     lane_change_limit: int = 3  # L of eq. (11)
     hysteresis: float = RuleParams().lane_hysteresis  # [m] the referee's lane membership
     margin: float = 0.15  # [m] kept short of where the referee's lane membership changes
@@ -90,7 +88,7 @@ class LaneLimitShield:
     def of(cls, kart: KartParams, track: Track, lane_change_limit: int, margin: float = 0.15) -> LaneLimitShield:
         """The shield for ``kart`` on ``track`` under a limit of ``lane_change_limit`` changes per straight."""
         offsets = np.ascontiguousarray(track.sample_lane_offsets(), dtype=np.float64)
-        return cls(CourseSteer.of(kart), offsets, tuple(track.centre_s.tolist()), lane_change_limit, margin=margin)
+        return cls(CourseSteer.of(kart), offsets, lane_change_limit, margin=margin)
 
     def band(self, me: KartView, track: Track) -> tuple[float, float] | None:
         """The lateral offsets [m] (low, high) the kart may reach without an illegal change; None on a curve, before
@@ -98,8 +96,7 @@ class LaneLimitShield:
         if me.lane_now <= 0 or not track.section_is_straight(me.checkpoints_passed):
             return None
         spare = max(self.lane_change_limit - me.lane_changes_now, 0)
-        row = min(max(bisect.bisect_right(self.centre_s, me.progress) - 1, 0), len(self.centre_s) - 1)
-        offsets = self.lane_offsets[row]  # lane 1 leftmost: offsets fall with the lane id
+        offsets = self.lane_offsets[track.sample_at(me.progress)]  # lane 1 leftmost: offsets fall with the lane id
         lanes = len(offsets)
         leftmost, rightmost = max(1, me.lane_now - spare), min(lanes, me.lane_now + spare)
         if leftmost == 1 and rightmost == lanes:

@@ -20,7 +20,6 @@ What the live Observation does not carry is reconstructed here, the same way the
 
 from __future__ import annotations
 
-import bisect
 from collections.abc import Sequence
 from typing import cast
 
@@ -106,7 +105,7 @@ class RLTracker:
         self.kart: KartParams = context.kart
         self.tables = TrackTables.of(track)
         self.lane_offsets = np.ascontiguousarray(track.sample_lane_offsets(), dtype=np.float64)
-        self.centre_s = track.centre_s.tolist()  # bisect: np.searchsorted's call costs more for one point
+        self.track = track
         self.straight = track.straight_flags.astype(bool)
         self.racing_lane = racing_lane_at_checkpoints(track)
         n_cp = track.n_checkpoints
@@ -203,7 +202,7 @@ class RLTracker:
 
     def _update_lane(self, k: int, s: float, d: float, passed: int, crossing_lane: int) -> None:
         """The referee's lane membership and eq. (10) counter, on this decision."""
-        row = min(max(bisect.bisect_right(self.centre_s, s) - 1, 0), len(self.centre_s) - 1)
+        row = self.track.sample_at(s)
         if self.lane_now[k] < 1:
             first = lane_with_hysteresis(self.lane_offsets, row, d, 0, HYSTERESIS)
             self.lane_now[k] = crossing_lane if crossing_lane >= 1 else first
