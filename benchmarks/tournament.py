@@ -8,8 +8,10 @@ side by side in the same run, the per-race runner (chunks of one race); the 1,00
   per-race runner, and ``batched_speedup`` their ratio;
 * ``races_per_minute``, ``realtime_factor`` (simulated race-seconds per wall-second): of the batched sample;
 * ``kart_steps_per_s_fixed_line``: kart-steps per wall-second per worker of a tournament of the fixed-line agents
-  alone (``fixed-lqng``, ``fixed-rl``, ``lane-follower``; batched), and ``..._realtime_per_core`` the same over
-  real time (50 kart-steps a second);
+  alone (``fixed-lqng``, ``fixed-rl``, ``lane-follower``; batched; ``--fixed-races`` races per pairing and track,
+  ``fixed_line_races`` in all), and ``..._realtime_per_core`` the same over real time (50 kart-steps a second);
+  ``worker_start_s``, the wall time of a tournament of one 1 s race of ``fixed-lqng`` and ``lane-follower``: what
+  any tournament spends starting its worker processes before it races;
 * ``outside_kernels_share``: the share of a one-process profile of the batched sample's first chunk spent outside
   the compiled kernels (numba's dispatchers: the search, the LQ game, the simulator) and the policy's matrix
   products: Python glue, the part batching and compiling can still remove.
@@ -86,6 +88,7 @@ def main(
     laps: int | None = typer.Option(None, min=1, help="laps per race (default: each track's)"),
     time_limit: float | None = typer.Option(None, min=1.0, help="[s] per race (default: the rules' limit)"),
     per_race: bool = typer.Option(True, help="also run the sample through the per-race runner, for the ratio"),
+    fixed_races: int = typer.Option(4, min=1, help="races per pairing and track in the fixed-line tournament"),
 ) -> None:
     """Run the sample (batched, then per race), the fixed-line tournament and the profile; print the JSON."""
     n_workers = workers or default_workers()
@@ -113,12 +116,15 @@ def main(
         print(f"per-race runner: {len(finished)} races in {alone_wall:.1f} s")
         summary["full_grid_minutes_per_race_runner"] = round(alone_wall * projection, 1)
         summary["batched_speedup"] = round(alone_wall / wall, 2)
-    fixed = TournamentSpec(FIXED_LINE_AGENTS, spec.tracks, races, seed, laps=laps, time_limit=time_limit)
+    fixed = TournamentSpec(FIXED_LINE_AGENTS, spec.tracks, fixed_races, seed, laps=laps, time_limit=time_limit)
     fixed_wall, fixed_store = _timed(fixed, n_workers, batch)
     kart_steps = sum(r.result.duration * SIM_HZ * len(r.job.agents) for r in fixed_store.races["bench"].values())
     per_core = kart_steps / fixed_wall / n_workers
+    summary["fixed_line_races"] = fixed.total
     summary["kart_steps_per_s_fixed_line"] = round(per_core)
     summary["kart_steps_per_s_fixed_line_realtime_per_core"] = round(per_core / SIM_HZ, 1)
+    start = TournamentSpec(("fixed-lqng", "lane-follower"), spec.tracks[:1], 1, seed, time_limit=1.0)
+    summary["worker_start_s"] = round(_timed(start, n_workers, batch)[0], 2)
     summary["outside_kernels_share"] = round(outside_kernels_share(spec, min(batch, spec.total)), 3)
     print(json.dumps(summary))
 

@@ -48,6 +48,12 @@ class LaneFollower:
         self._x_ext = np.tile(track.centre_xy[:, 0], 3)
         self._y_ext = np.tile(track.centre_xy[:, 1], 3)
         self._preview_offsets = np.linspace(0.0, self.params.preview, 41)
+        # the curvature with one sample wrapped onto each end: ``np.interp(..., period=length)`` builds these
+        # (and sorts the samples) on every call; built once, the interpolation is the same to the bit
+        self._kappa_s = np.concatenate([s[-1:] - track.length, s, s[:1] + track.length])
+        kappa = track.centre_curvature
+        self._kappa = np.concatenate([kappa[-1:], kappa, kappa[:1]])
+        self._kappa_abs = np.abs(self._kappa)
 
     def act(
         self,
@@ -78,9 +84,9 @@ class LaneFollower:
         delta = np.arctan2(2.0 * self.kart.wheelbase * np.sin(alpha), dist)
         steer = np.clip(delta / self.kart.max_steer_angle, -1.0, 1.0)
         # speed profile: v(s') limited by the corner at s' and the braking distance to it
-        s_prev = progress[..., None] + self._preview_offsets
-        kappa = np.interp(s_prev % track.length, track.centre_s, np.abs(track.centre_curvature), period=track.length)
-        kappa_signed = np.interp(s_prev % track.length, track.centre_s, track.centre_curvature, period=track.length)
+        s_prev = (progress[..., None] + self._preview_offsets) % track.length % track.length
+        kappa = np.interp(s_prev, self._kappa_s, self._kappa_abs)
+        kappa_signed = np.interp(s_prev, self._kappa_s, self._kappa)
         # radius of the followed offset: R_offset = R_centre - d * sign(kappa)
         offset = np.asarray(lateral_target)[..., None] if np.ndim(lateral_target) else lateral_target
         radius = np.maximum(1.0 / np.maximum(kappa, 1e-6) - offset * np.sign(kappa_signed), 1.0)
@@ -109,13 +115,15 @@ class LaneFollower:
     def _frame(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         track = self.track
         s = np.mod(s, track.length)
-        cx = np.interp(s, self._s_ext, self._x_ext)
-        cy = np.interp(s, self._s_ext, self._y_ext)
         eps = 0.5
-        fx = np.interp(s + eps, self._s_ext, self._x_ext) - np.interp(s - eps, self._s_ext, self._x_ext)
-        fy = np.interp(s + eps, self._s_ext, self._y_ext) - np.interp(s - eps, self._s_ext, self._y_ext)
+        # the point and its neighbours either side in one interpolation per coordinate (elementwise: the same
+        # numbers as one call each)
+        around = np.stack([s, s + eps, s - eps])
+        x = np.interp(around, self._s_ext, self._x_ext)
+        y = np.interp(around, self._s_ext, self._y_ext)
+        fx, fy = x[1] - x[2], y[1] - y[2]
         norm = np.hypot(fx, fy)
-        return -fy / norm, fx / norm, cx, cy
+        return -fy / norm, fx / norm, x[0], y[0]
 
 
 class LaneFollowerController:

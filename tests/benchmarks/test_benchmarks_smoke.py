@@ -71,7 +71,8 @@ TINY: dict[str, tuple[list[str], set[str]]] = {
         {"ticks", "tick_jitter_p99_ms", "memory_growth_pct", "errors", "errors_total"},
     ),
     "tournament.py": (
-        ["--agents", "fixed-lqng,lane-follower", "--tracks", "oval", "--workers", "1", "--time-limit", "4"],
+        ["--agents", "fixed-lqng,lane-follower", "--tracks", "oval", "--workers", "1", "--time-limit", "4"]
+        + ["--fixed-races", "1"],
         {
             "races",
             "realtime_factor",
@@ -79,6 +80,7 @@ TINY: dict[str, tuple[list[str], set[str]]] = {
             "full_grid_minutes_per_race_runner",
             "batched_speedup",
             "kart_steps_per_s_fixed_line",
+            "worker_start_s",
             "outside_kernels_share",
         },
     ),
