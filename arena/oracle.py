@@ -176,7 +176,10 @@ class LaneOracle:
 def oracle_driver(settings: OracleSettings) -> tuple[HierarchicalController, LaneOracle]:
     """The ego the oracle steers (the base agent with its planner wrapped) and the hook that shows it the race."""
     driver = make_agent(settings.base)
-    assert isinstance(driver, HierarchicalController), f"{settings.base} is not a hierarchical agent"
+    if not isinstance(driver, HierarchicalController):
+        raise ValueError(
+            f"the oracle's base must be a hierarchical agent (a planner and a tracker); {settings.base} is not"
+        )
     planner = OraclePlanner(driver.planner, settings)
     driver.planner = planner
     driver.name = ORACLE

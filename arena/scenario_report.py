@@ -38,8 +38,11 @@ def cell_row(cell: dict[str, Any]) -> list[str]:
     ]
 
 
-def markdown_report(summary: dict[str, Any], wall_seconds: float | None = None) -> str:
-    """A stored run (:meth:`SuiteResult.to_json`) as Markdown tables."""
+def markdown_report(
+    summary: dict[str, Any], wall_seconds: float | None = None, beside: Sequence[dict[str, Any]] = ()
+) -> str:
+    """A stored run (:meth:`SuiteResult.to_json`) as Markdown tables; for an oracle's run, each of the agents'
+    summaries ``beside`` compared with it cell by cell (:func:`beside_oracle`)."""
     head = [
         "scenario",
         "track",
@@ -53,6 +56,7 @@ def markdown_report(summary: dict[str, Any], wall_seconds: float | None = None) 
         "illegal lane changes / attempt",
     ]
     took = "" if wall_seconds is None else f" ({wall_seconds / 60:.0f} minutes here)"
+    subcommand = summary.get("subcommand", "run")
     thresholds = [
         [ego, opponent, "below every pace" if r50 is None else f"{r50:g}"]
         for ego, row in summary["pass_threshold_r50"].items()
@@ -61,23 +65,82 @@ def markdown_report(summary: dict[str, Any], wall_seconds: float | None = None) 
     lines = [
         f"# Scenarios: {summary['attempts']} attempts per cell, seed {summary['seed']}",
         "",
-        f"Regenerate: `karting scenarios run {summary.get('command', '...')}`{took}.",
+        f"Regenerate: `karting scenarios {subcommand} {summary.get('command', '...')}`{took}.",
         "",
         "Success: overtake, the ego passed (held the place 2 s) and is ahead at the end; defend, the ego is still "
         "ahead at the end. Intervals: Wilson for rates, bootstrap for means.",
         "",
+    ]
+    if "oracle" in summary:
+        settings = summary["oracle"]
+        lines += [
+            f"The ego `oracle` is `{settings['base']}` with each of its plans replaced by whichever of that plan and "
+            f"its variants holding one lane for the next checkpoints ends furthest ahead, with no collision at fault "
+            f"or illegal lane change, when raced {settings['lookahead_s']:g} s forward in a copy of the race against "
+            "the opponent's own controller (`arena/oracle.py`): a bound on what lane choices could do on these "
+            "attempts, not a proof of the best.",
+            "",
+        ]
+    lines += [
         markdown_table([head, *(cell_row(cell) for cell in summary["cells"])]),
         "",
         "## Pass threshold r50",
         "",
         markdown_table([["ego", "opponent", "r50"], *thresholds]),
     ]
+    for agents in beside:
+        lines += ["", *beside_oracle(summary, agents)]
     return "\n".join(lines) + "\n"
 
 
-def publish(summary: dict[str, Any], folder: Path, agents: Sequence[str], wall_seconds: float) -> None:
-    """Write ``summary`` into ``folder``: the summary JSON, its Markdown report and a manifest of the code, the
-    agents (every parameter, the trained weights), the condition sets, the machine and the wall time."""
+def _cell_key(cell: dict[str, Any]) -> tuple[str, str, str, float]:
+    return (cell["scenario"], cell["track"], cell["opponent"], float(cell["pace"]))
+
+
+def beside_oracle(oracle: dict[str, Any], agents: dict[str, Any]) -> list[str]:
+    """Markdown lines: each cell the oracle and the ``agents`` summary share, the oracle's success beside that of
+    the ego it is built on (its base: the same tracker), and the ego's success as a share of the oracle's (where the
+    oracle passed at all). The oracle's attempts are the first of the ego's (the same seeds)."""
+    bound = {_cell_key(cell): cell for cell in oracle["cells"]}
+    base = oracle.get("oracle", {}).get("base")
+    rows = []
+    for cell in agents["cells"]:
+        found = bound.get(_cell_key(cell))
+        if found is None or cell["ego"] != base:
+            continue
+        share = "" if found["pass_success"] == 0 else f"{cell['pass_success'] / found['pass_success']:.2f}"
+        rows.append(
+            [
+                cell["track"],
+                cell["opponent"],
+                f"{cell['pace']:g}",
+                f"{found['pass_success']:.2f}{_interval(found['ci95'])} ({found['attempts']})",
+                cell["ego"],
+                f"{cell['pass_success']:.2f}{_interval(cell['ci95'])} ({cell['attempts']})",
+                share,
+            ]
+        )
+    head = ["track", "opponent", "pace", "oracle (attempts)", "ego", "ego (attempts)", "ego / oracle"]
+    command = agents.get("command", "")
+    return [
+        "## The agents beside the oracle",
+        "",
+        f"The agents' figures: `karting scenarios run {command}`." if command else "The agents' figures:",
+        "",
+        markdown_table([head, *rows]),
+    ]
+
+
+def publish(
+    summary: dict[str, Any],
+    folder: Path,
+    agents: Sequence[str],
+    wall_seconds: float,
+    beside: Sequence[dict[str, Any]] = (),
+) -> None:
+    """Write ``summary`` into ``folder``: the summary JSON, its Markdown report (with the summaries ``beside``
+    compared cell by cell, for an oracle's) and a manifest of the code, the agents (every parameter, the trained
+    weights), the condition sets, the machine and the wall time."""
     folder.mkdir(parents=True, exist_ok=True)
     described = [describe_agent(a) for a in sorted({without_pace(a) for a in agents})]
     sets = sorted({s["conditions"] for s in summary["scenarios"].values()})
@@ -85,5 +148,5 @@ def publish(summary: dict[str, Any], folder: Path, agents: Sequence[str], wall_s
     manifest = build_manifest("scenarios", described, "paper", conditions).to_json()
     manifest["wall_seconds"] = round(wall_seconds, 1)
     (folder / SUMMARY_FILE).write_text(json.dumps(summary, indent=1) + "\n")
-    (folder / REPORT_FILE).write_text(markdown_report(summary, wall_seconds))
+    (folder / REPORT_FILE).write_text(markdown_report(summary, wall_seconds, beside))
     (folder / MANIFEST_FILE).write_text(json.dumps(manifest, indent=1) + "\n")

@@ -105,14 +105,22 @@ def oracle(
     attempts: Annotated[int, typer.Option(min=1, max=1000, help="seeded attempts per cell")] = 10,
     seed: int = 0,
     lookahead: Annotated[float, typer.Option(min=0.5, max=10.0, help="[s] each candidate raced forward")] = 4.0,
+    base: Annotated[str, typer.Option(help="the hierarchical agent whose plans the oracle improves on")] = "mcts-lqng",
     workers: Annotated[int, typer.Option(min=1, help="worker processes the cells are dealt to")] = 1,
     out: Annotated[Path | None, typer.Option(help="also write the JSON summary here")] = None,
+    publish: Annotated[
+        Path | None, typer.Option(help="publish the summary, its report and a manifest into this folder")
+    ] = None,
+    beside: Annotated[
+        list[Path] | None,
+        typer.Option(help="agents' summaries (`run --out` or a published summary.json) to report beside the oracle"),
+    ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="print the JSON summary as the last line")] = False,
 ) -> None:
-    """The oracle bound (:mod:`arena.oracle`): the same attempts as ``run``, ``mcts-lqng`` as the ego with each of
-    its plans replaced by whichever of it and its held-lane variants ends furthest ahead when raced forward in the
-    simulator against the opponent's own controller."""
-    from arena.oracle import ORACLE, OracleSettings, run_oracle_cells
+    """The oracle bound (:mod:`arena.oracle`): the same attempts as ``run``, the ``--base`` agent as the ego with
+    each of its plans replaced by whichever of it and its held-lane variants ends furthest ahead when raced forward
+    in the simulator against the opponent's own controller."""
+    from arena.oracle import ORACLE, OracleSettings, oracle_driver, run_oracle_cells
     from arena.scenarios import Cell, SuiteResult, load_scenario
     from controllers.registry import validate_agent
     from sim_core.params import MIN_PACE
@@ -121,6 +129,9 @@ def oracle(
         loaded = [load_scenario(name) for name in _split(scenarios)]
         for opponent in _split(opponents):
             validate_agent(opponent)
+        settings = OracleSettings(lookahead_s=lookahead, base=base)
+        oracle_driver(settings)  # a ValueError unless the base is a registered hierarchical agent
+        agents_beside = [json.loads(path.read_text()) for path in beside or ()]
         if paces and not all(MIN_PACE <= float(p) <= 1.0 for p in _split(paces)):
             raise ValueError(f"paces must be in [{MIN_PACE}, 1]")
         plans = [
@@ -135,18 +146,41 @@ def oracle(
             )
             for s in loaded
         ]
-    except (KeyError, ValueError) as exc:
+    except (KeyError, ValueError, OSError, json.JSONDecodeError) as exc:
         error(str(exc).strip("'\""))
         raise typer.Exit(2) from None
     console.print(f"{sum(len(c) for _, c in plans) * attempts} oracle attempts", style="dim")
-    settings = OracleSettings(lookahead_s=lookahead)
+    started = time.perf_counter()
     runs = tuple((s, tuple(run_oracle_cells(s, cells, attempts, seed, settings, workers))) for s, cells in plans)
+    wall = time.perf_counter() - started
     summary = SuiteResult(runs, attempts, seed).to_json()
     summary["oracle"] = {"lookahead_s": settings.lookahead_s, "base": settings.base}
+    summary["subcommand"] = "oracle"
+    summary["command"] = " ".join(
+        f"--{name} {value}"
+        for name, value in (
+            ("scenarios", scenarios),
+            ("opponents", opponents),
+            ("tracks", tracks),
+            ("paces", paces),
+            ("attempts", attempts),
+            ("seed", seed),
+            ("lookahead", lookahead),
+            ("base", base),
+            ("publish", publish),
+            *(("beside", path) for path in beside or ()),
+        )
+        if value is not None
+    )
     _show(summary)
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(json.dumps(summary, indent=1) + "\n")
+    if publish is not None:
+        from arena.scenario_report import publish as publish_summary
+
+        publish_summary(summary, publish, [base, *_split(opponents)], wall, beside=agents_beside)
+        console.print(f"published into {publish}/")
     if as_json:
         print_json(summary)
 
