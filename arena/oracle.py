@@ -29,6 +29,7 @@ import numpy as np
 from arena.scenarios import Attempt, Cell, CellFigures, Scenario, attempt_specs, judge
 from arena.tournament import start_method
 from controllers.base import Controller, HighLevelPlanner, RaceContext
+from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.plan import Plan, Waypoint
 from controllers.race import decide, run_race
@@ -176,9 +177,10 @@ class LaneOracle:
 def oracle_driver(settings: OracleSettings) -> tuple[HierarchicalController, LaneOracle]:
     """The ego the oracle steers (the base agent with its planner wrapped) and the hook that shows it the race."""
     driver = make_agent(settings.base)
-    if not isinstance(driver, HierarchicalController):
+    # a fixed-line agent is composed the same way, but its high level replays a line: it chooses no lanes to improve
+    if not isinstance(driver, HierarchicalController) or isinstance(driver.planner, FixedLinePlanner):
         raise ValueError(
-            f"the oracle's base must be a hierarchical agent (a planner and a tracker); {settings.base} is not"
+            f"the oracle's base must be a hierarchical agent (a tactical planner and a tracker); {settings.base} is not"
         )
     planner = OraclePlanner(driver.planner, settings)
     driver.planner = planner

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from arena.intervals import wilson
-from arena.scenario_report import markdown_report
+from arena.scenario_report import beside_oracle, markdown_report
 from arena.scenarios import (
     Attempt,
     Cell,
@@ -114,3 +114,39 @@ def test_a_ci_sized_run_of_real_cells_passes_a_slow_leader_and_reports_it(tmp_pa
     assert "| overtake-straight | oval | mcts-lqng | fixed-lqng | 0.9 | 2 | 1.00 [0.34, 1.00]" in markdown_report(
         summary
     )
+
+
+def _cell(ego: str, opponent: str, pace: float, success: float, attempts: int = 10) -> dict[str, object]:
+    return {
+        "scenario": "overtake-straight",
+        "track": "oval",
+        "ego": ego,
+        "opponent": opponent,
+        "pace": pace,
+        "attempts": attempts,
+        "pass_success": success,
+        "ci95": [0.0, 1.0],
+    }
+
+
+def test_the_agents_beside_the_oracle_are_its_base_ego_on_the_cells_both_ran() -> None:
+    oracle = {
+        "oracle": {"base": "mcts-lqng", "lookahead_s": 4.0},
+        "cells": [_cell("oracle", "e2e", 0.95, 0.8), _cell("oracle", "e2e", 0.97, 0.0)],
+    }
+    agents = {
+        "command": "--egos mcts-lqng,mcts-rl",
+        "cells": [
+            _cell("mcts-lqng", "e2e", 0.95, 0.6, 30),
+            _cell("mcts-rl", "e2e", 0.95, 0.9, 30),  # another ego's tracker: not compared
+            _cell("mcts-lqng", "e2e", 0.97, 0.1, 30),
+            _cell("mcts-lqng", "fixed-rl", 0.95, 0.5, 30),  # a cell the oracle did not run
+        ],
+    }
+    text = "\n".join(beside_oracle(oracle, agents))
+    rows = [line for line in text.splitlines() if line.startswith("| oval")]
+    assert rows == [
+        "| oval | e2e | 0.95 | 0.80 [0.00, 1.00] (10) | mcts-lqng | 0.60 [0.00, 1.00] (30) | 0.75 |",
+        "| oval | e2e | 0.97 | 0.00 [0.00, 1.00] (10) | mcts-lqng | 0.10 [0.00, 1.00] (30) |  |",
+    ]
+    assert "`karting scenarios run --egos mcts-lqng,mcts-rl`" in text

@@ -65,3 +65,12 @@ def test_the_oracle_command_checks_its_opponents_and_paces() -> None:
     assert bad_agent.exit_code == 2 and "unknown controller 'schumacher'" in bad_agent.output
     bad_pace = runner.invoke(app, ["scenarios", "oracle", "--paces", "0.2"])
     assert bad_pace.exit_code == 2 and "paces must be in [0.5, 1]" in bad_pace.output
+
+
+def test_the_oracle_command_checks_its_base_and_the_summaries_beside(tmp_path: Path) -> None:
+    not_hierarchical = runner.invoke(app, ["scenarios", "oracle", "--base", "fixed-lqng"])
+    assert not_hierarchical.exit_code == 2 and "must be a hierarchical agent" in not_hierarchical.output
+    unknown = runner.invoke(app, ["scenarios", "oracle", "--base", "schumacher"])
+    assert unknown.exit_code == 2 and "unknown controller 'schumacher'" in unknown.output
+    missing = runner.invoke(app, ["scenarios", "oracle", "--beside", str(tmp_path / "none.json")])
+    assert missing.exit_code == 2 and "none.json" in missing.output
