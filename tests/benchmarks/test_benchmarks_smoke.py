@@ -71,8 +71,18 @@ TINY: dict[str, tuple[list[str], set[str]]] = {
         {"ticks", "tick_jitter_p99_ms", "memory_growth_pct", "errors", "errors_total"},
     ),
     "tournament.py": (
-        ["--agents", "fixed-lqng,lane-follower", "--tracks", "oval", "--workers", "1"]
-        + ["--time-limit", "4", "--fixed-races", "1"],
+        [
+            "--agents",
+            "fixed-lqng,lane-follower",
+            "--tracks",
+            "oval",
+            "--workers",
+            "1",
+            "--time-limit",
+            "4",
+            "--fixed-races",
+            "1",
+        ],
         {
             "races",
             "realtime_factor",
