@@ -5,7 +5,9 @@ one JSON object last, with ``env_steps_per_s`` (learner decisions per second of 
 Stable-Baselines3's ``total_timesteps`` and the paper's 8M steps use), the learning time split into rollouts
 (``rollout_s``: races, actions, buffer) and PPO updates (``update_s``), and the process's CPU seconds
 (``cpu_s``: on a machine shared with other work, CPU time well under ``total_s`` means the run waited for a
-core). Run from the repo root:
+core), and ``update_bound_env_steps_per_s``: the steps over the update time alone, the rate the loop could reach
+with an environment that cost nothing (PPO's epochs over the spec's network and buffer bound it). Run from the repo
+root:
 ``.venv/bin/python benchmarks/training.py`` (``--help``: the steps, races and rollout buffer; the smoke test runs
 it tiny).
 """
@@ -57,6 +59,7 @@ def main() -> None:
                 "total_s": round(total, 2),
                 "cpu_s": round(cpu, 2),
                 "env_steps_per_s": round(result.env_steps_per_s),
+                "update_bound_env_steps_per_s": round(result.timesteps / max(result.update_s, 1e-9)),
             }
         )
     )

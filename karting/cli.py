@@ -361,6 +361,15 @@ def train(
             "0: top speed everywhere, what mcts-rl's planner sends when no kart is ahead)",
         ),
     ] = 1.5,
+    karts: Annotated[
+        int,
+        typer.Option(
+            min=2,
+            max=8,
+            help="karts per training race (the learner and its self-play opponents; the paper: 2). A shipped "
+            "agent fine-tuned in larger races is widened: the added opponents' inputs start at zero weight",
+        ),
+    ] = 2,
     fine_tune_from: Annotated[
         Path | None,
         typer.Option(
@@ -410,6 +419,7 @@ def train(
         near_wall_heading=math.radians(near_wall_heading_deg),
         solo_probability=solo_spawns,
         mcts_speed_sigma=mcts_speed_sigma,
+        n_karts=karts,
     )
     result = run_training(env, ppo, folder, resume=resume, progress_bar=not as_json, fine_tune_from=fine_tune_from)
     if as_json:

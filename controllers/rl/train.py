@@ -28,8 +28,9 @@ from stable_baselines3.common.utils import LinearSchedule
 from stable_baselines3.common.vec_env import VecNormalize
 
 from controllers.rl.batch import RaceBatch
-from controllers.rl.config import EnvConfig, PPOConfig
+from controllers.rl.config import STACK, EnvConfig, PPOConfig
 from controllers.rl.curves import LOG_FIELDS, plot_curves
+from controllers.rl.observations import frame_size, widened_columns
 from controllers.rl.policy import POLICY_FILE
 from controllers.rl.selfplay import OpponentPool, SelfPlayVecEnv
 
@@ -136,10 +137,26 @@ def save(model: BaseAlgorithm, norm: VecNormalize, folder: Path) -> None:
     norm.save(str(folder / NORMALISER))
 
 
+def widen_first_layer(
+    w0: np.ndarray, obs_mean: np.ndarray, obs_var: np.ndarray, width: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """An actor's first layer and observation statistics for ``width`` inputs, from an actor trained in races of
+    fewer karts (:func:`controllers.rl.observations.widened_columns`): the added opponents' columns weighted
+    zero (so the actor acts as before) with the first opponent's statistics."""
+    karts = {STACK * frame_size(m): m for m in range(2, 9)}
+    if w0.shape[1] not in karts or width not in karts:
+        raise ValueError(f"cannot widen an actor of {w0.shape[1]} inputs to {width}: no race sizes give those")
+    source, added = widened_columns(karts[w0.shape[1]], karts[width], STACK)
+    wide = w0[:, source].copy()
+    wide[:, added] = 0.0
+    return wide, obs_mean[source].copy(), obs_var[source].copy()
+
+
 def load_actor(model: PPO, venv: VecNormalize, folder: Path) -> None:
     """Copy the actor (hidden layers, action head, log std) and the observation statistics of ``folder``'s
     ``policy.npz`` (what :func:`controllers.rl.policy.export_policy` ships) into a fresh ``model`` and ``venv``.
-    The critic stays fresh: the shipped agents keep no value network."""
+    The critic stays fresh: the shipped agents keep no value network. An actor trained in races of fewer karts
+    is widened to the model's (:func:`widen_first_layer`): fine-tuning a shipped agent in fields."""
     with np.load(folder / POLICY_FILE, allow_pickle=False) as data:
         n = int(data["n_layers"])
         state = model.policy.state_dict()
@@ -149,17 +166,22 @@ def load_actor(model: PPO, venv: VecNormalize, folder: Path) -> None:
         names = [f"mlp_extractor.policy_net.{i}" for i in layers] + ["action_net"]
         if len(names) != n:
             raise ValueError(f"{folder / POLICY_FILE} has {n} layers, the model {len(names)}")
+        arrays = {key: np.asarray(data[key]) for key in data.files}
+        obs_mean, obs_var = arrays["obs_mean"].astype(np.float64), arrays["obs_var"].astype(np.float64)
+        width = int(state[f"{names[0]}.weight"].shape[1])
+        if arrays["w0"].shape[1] < width:  # trained in smaller races: widened to the model's (more opponents)
+            arrays["w0"], obs_mean, obs_var = widen_first_layer(arrays["w0"], obs_mean, obs_var, width)
         for i, name in enumerate(names):
             for part, key in (("weight", f"w{i}"), ("bias", f"b{i}")):
-                if state[f"{name}.{part}"].shape != data[key].shape:
+                if state[f"{name}.{part}"].shape != arrays[key].shape:
                     raise ValueError(f"{key} of {folder / POLICY_FILE} does not fit the model's {name}.{part}")
-                state[f"{name}.{part}"] = torch.as_tensor(data[key], dtype=state[f"{name}.{part}"].dtype)
-        state["log_std"] = torch.as_tensor(data["log_std"], dtype=state["log_std"].dtype)
+                state[f"{name}.{part}"] = torch.as_tensor(arrays[key], dtype=state[f"{name}.{part}"].dtype)
+        state["log_std"] = torch.as_tensor(arrays["log_std"], dtype=state["log_std"].dtype)
         model.policy.load_state_dict(state)
         statistics = venv.obs_rms
         assert isinstance(statistics, RunningMeanStd), "a flat (Box) observation space"
-        statistics.mean = np.asarray(data["obs_mean"], dtype=np.float64).copy()
-        statistics.var = np.asarray(data["obs_var"], dtype=np.float64).copy()
+        statistics.mean = obs_mean.copy()
+        statistics.var = obs_var.copy()
         statistics.count = SHIPPED_STATISTICS_COUNT
         venv.clip_obs = float(data["clip_obs"])
 

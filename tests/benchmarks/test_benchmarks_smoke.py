@@ -96,7 +96,7 @@ TINY: dict[str, tuple[list[str], set[str]]] = {
     ),
     "training.py": (
         ["--steps", "512", "--warm-steps", "256", "--races", "4", "--buffer", "256", "--batch", "64"],
-        {"env_steps_per_s", "steps", "learn_s"},
+        {"env_steps_per_s", "update_bound_env_steps_per_s", "steps", "learn_s"},
     ),
 }
 
