@@ -79,6 +79,35 @@ def test_a_shipped_agent_fine_tunes_from_its_inference_files(tmp_path: Path) -> 
     assert tuned.timesteps >= 4096 and (tmp_path / "tuned" / MODEL).exists()
 
 
+def test_a_shipped_agent_fine_tuned_in_a_field_starts_as_the_shipped_policy_on_what_it_saw() -> None:
+    """Training races of 4 karts: the shipped 2-kart actor widened, acting on each kart's observation as the shipped
+    policy acts on the same observation without the two added opponents."""
+    from dataclasses import replace
+
+    import torch
+
+    from controllers.rl.config import STACK
+    from controllers.rl.observations import widened_columns
+    from controllers.rl.policy import load_policy
+    from controllers.rl.train import load_actor, make_model
+
+    shipped = Path("controllers/rl/weights/e2e")
+    env = replace(make_config("e2e", tracks=("train-oval-small",)), n_karts=4)
+    ppo = PPOConfig(total_steps=2048, n_races=8, buffer_size=1024, batch_size=256)
+    venv = VecNormalize(SelfPlayVecEnv(RaceBatch(env, 8), OpponentPool(1, 1.0, 0)), norm_obs=True, clip_obs=10.0)
+    model = make_model(venv, ppo)
+    load_actor(model, venv, shipped)
+    venv.reset()
+    raw = venv.get_original_obs()[:4]
+    source, added = widened_columns(2, 4, STACK)
+    narrow = np.zeros((len(raw), STACK * 55))
+    narrow[:, source[~added]] = raw[:, ~added]  # the shipped agent's view: the first opponent only
+    with torch.no_grad():
+        mean = model.policy.get_distribution(torch.as_tensor(venv.normalize_obs(raw))).distribution.mean.numpy()
+    policy = load_policy(shipped)
+    assert raw.shape[1] == STACK * 79 and np.allclose(mean, np.stack([policy.mean(o) for o in narrow]), atol=1e-3)
+
+
 def test_the_pool_drives_opponents_by_a_copy_of_the_actor_frozen_when_added() -> None:
     """A snapshot's mean action (its numpy policy, and the float32 layers the pool drives by) equals the torch
     actor's at the time it was added, row by row and batched, and later training of the live policy does not
