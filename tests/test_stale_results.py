@@ -11,6 +11,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from arena.manifest import describe_agent
 from arena.publish import published_problems
 from arena.reproduce import reproduction_problems, stale_conditions
@@ -48,16 +50,18 @@ def test_every_other_published_tournament_is_of_the_current_agents_and_condition
     assert problems == [], "stale published tournaments:\n" + "\n".join(problems)
 
 
-def test_every_published_field_study_is_of_the_current_agents() -> None:
-    """A field study (``karting reproduce field``) records each agent with every parameter and its weights: each
-    must describe the same agent today. (Its manifest names its condition set without the set's values, so a
-    changed set is not caught here.)"""
-    folders = [m.parent for m in sorted(RESULTS.rglob("manifest.json")) if json.loads(m.read_text())["kind"] == "field"]
-    assert folders, "no published field study found: the check would pass on nothing"
+@pytest.mark.parametrize("kind", ["field", "scenarios"])
+def test_every_published_field_study_and_scenario_suite_is_of_the_current_agents(kind: str) -> None:
+    """A field study (``karting reproduce field``) or a scenario suite (``karting scenarios run|oracle
+    --publish``) records each agent with every parameter and its weights: each must describe the same agent
+    today. (A field study's manifest names its condition set without the set's values, so a changed set is not
+    caught here.)"""
+    folders = [m.parent for m in sorted(RESULTS.rglob("manifest.json")) if json.loads(m.read_text())["kind"] == kind]
+    assert folders, f"no published {kind} result found: the check would pass on nothing"
     problems = []
     for folder in folders:
         manifest = json.loads((folder / "manifest.json").read_text())
         for recorded in manifest["agents"]:
             if describe_agent(recorded["agent"]).to_json() != recorded:
                 problems.append(f"{folder}: {recorded['agent']} is no longer the agent it raced: race it again")
-    assert problems == [], "stale field studies:\n" + "\n".join(problems)
+    assert problems == [], f"stale {kind} results:\n" + "\n".join(problems)
