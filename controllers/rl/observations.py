@@ -56,6 +56,11 @@ def frame_size(n_karts: int) -> int:
     return OWN_FEATURES + OPPONENT_FEATURES * (n_karts - 1) + TARGET_FEATURES * HORIZON + N_RAYS
 
 
+def race_karts(obs_size: int, stack: int) -> int | None:
+    """The karts per race (1 to 8) whose stacked observation has ``obs_size`` floats, or ``None``."""
+    return {stack * frame_size(m): m for m in range(1, 9)}.get(obs_size)
+
+
 def widened_columns(karts_from: int, karts_to: int, stack: int) -> tuple[np.ndarray, np.ndarray]:
     """How a stacked observation of races of ``karts_from`` karts maps into one of ``karts_to`` karts (more
     opponents): for each column of the wide observation, the narrow column it corresponds to, and whether it is
@@ -66,22 +71,14 @@ def widened_columns(karts_from: int, karts_to: int, stack: int) -> tuple[np.ndar
     in fields without forgetting how to drive."""
     if not 2 <= karts_from <= karts_to:
         raise ValueError(f"can widen from 2 or more karts to as many or more, not {karts_from} to {karts_to}")
-    narrow, wide = frame_size(karts_from), frame_size(karts_to)
+    narrow = frame_size(karts_from)
+    kept = OWN_FEATURES + OPPONENT_FEATURES * (karts_from - 1)  # own features and the opponents it had
     first_opponent = np.arange(OWN_FEATURES, OWN_FEATURES + OPPONENT_FEATURES)
-    frame_source, frame_added = [], []
-    for column in range(wide):
-        opponents_end = OWN_FEATURES + OPPONENT_FEATURES * (karts_to - 1)
-        if column < OWN_FEATURES + OPPONENT_FEATURES * (karts_from - 1):
-            frame_source.append(column)  # own features and the opponents the narrow frame had
-            frame_added.append(False)
-        elif column < opponents_end:
-            frame_source.append(int(first_opponent[(column - OWN_FEATURES) % OPPONENT_FEATURES]))
-            frame_added.append(True)
-        else:  # targets and rays, after the opponents
-            frame_source.append(column - (wide - narrow))
-            frame_added.append(False)
-    source = np.concatenate([np.asarray(frame_source) + f * narrow for f in range(stack)])
-    return source, np.tile(np.asarray(frame_added), stack)
+    added = np.tile(first_opponent, karts_to - karts_from)
+    frame = np.concatenate([np.arange(kept), added, np.arange(kept, narrow)])  # targets and rays last
+    frame_added = np.concatenate([np.zeros(kept, bool), np.ones(added.size, bool), np.zeros(narrow - kept, bool)])
+    source = np.concatenate([frame + f * narrow for f in range(stack)])
+    return source, np.tile(frame_added, stack)
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ from controllers.base import Action, ActionFilter, RaceContext
 from controllers.plan import Plan
 from controllers.rl.actions import ACCELERATE, world_actions
 from controllers.rl.config import DECISION_STEPS, EPISODE_STEPS, SPEED_SCALE, STACK, AgentKind
-from controllers.rl.observations import TrackTables, build_frame, frame_size, place_phantoms
+from controllers.rl.observations import TrackTables, build_frame, frame_size, place_phantoms, race_karts
 from controllers.rl.policy import Policy, load_policy, weights_folder
 from controllers.rl.spawns import racing_lane_at_checkpoints
 from sim_core import state as st
@@ -96,10 +96,9 @@ class RLTracker:
         for action_filter in self.filters:
             action_filter.reset(context)
         track, n = context.track, context.n_karts
-        sizes = {STACK * frame_size(m): m for m in range(1, 9)}
-        if self.policy.obs_size not in sizes:
+        m = race_karts(self.policy.obs_size, STACK)  # karts of the trained races (2 for the shipped agents)
+        if m is None:
             raise ValueError(f"{self.agent} weights take {self.policy.obs_size} floats: no race size gives that")
-        m = sizes[self.policy.obs_size]  # karts of the trained races (2 for the shipped agents)
         self._ctx = context
         self.rng = np.random.default_rng([abs(context.seed), context.ego])
         self.kart: KartParams = context.kart

@@ -30,7 +30,7 @@ from stable_baselines3.common.vec_env import VecNormalize
 from controllers.rl.batch import RaceBatch
 from controllers.rl.config import STACK, EnvConfig, PPOConfig
 from controllers.rl.curves import LOG_FIELDS, plot_curves
-from controllers.rl.observations import frame_size, widened_columns
+from controllers.rl.observations import race_karts, widened_columns
 from controllers.rl.policy import POLICY_FILE
 from controllers.rl.selfplay import OpponentPool, SelfPlayVecEnv
 
@@ -143,10 +143,10 @@ def widen_first_layer(
     """An actor's first layer and observation statistics for ``width`` inputs, from an actor trained in races of
     fewer karts (:func:`controllers.rl.observations.widened_columns`): the added opponents' columns weighted
     zero (so the actor acts as before) with the first opponent's statistics."""
-    karts = {STACK * frame_size(m): m for m in range(2, 9)}
-    if w0.shape[1] not in karts or width not in karts:
+    karts_from, karts_to = race_karts(w0.shape[1], STACK), race_karts(width, STACK)
+    if karts_from is None or karts_to is None:
         raise ValueError(f"cannot widen an actor of {w0.shape[1]} inputs to {width}: no race sizes give those")
-    source, added = widened_columns(karts[w0.shape[1]], karts[width], STACK)
+    source, added = widened_columns(karts_from, karts_to, STACK)
     wide = w0[:, source].copy()
     wide[:, added] = 0.0
     return wide, obs_mean[source].copy(), obs_var[source].copy()
