@@ -164,9 +164,15 @@ def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
+# What a manifest's "tracked files differed" leaves out: the documentation, where the results are published.
+# `make results` writes each result there before the next is raced; those files are no code the races ran.
+DOCUMENTATION_EXCLUDES = (":(exclude)docs", ":(exclude)README.md")
+
+
 @lru_cache(maxsize=1)
 def source_commit() -> tuple[str, bool | None]:
-    """The git commit of the code this process runs and whether tracked files differ from it. Outside a checkout
+    """The git commit of the code this process runs and whether tracked files other than the documentation
+    (:data:`DOCUMENTATION_EXCLUDES`) differ from it. Outside a checkout
     (an image, a copy of the tree): the commit named by :data:`COMMIT_VARIABLE` if set, else ``"unknown"``; whether
     files differ is then unknown (``None``). Asked once per process: the code loaded is the code it started with."""
     try:
@@ -174,7 +180,7 @@ def source_commit() -> tuple[str, bool | None]:
         if Path(top).resolve() != ROOT:
             raise OSError(f"{ROOT} is not the top of a checkout")  # installed inside some other repository
         commit = _git("rev-parse", "HEAD")
-        changed = _git("status", "--porcelain", "--untracked-files=no")
+        changed = _git("status", "--porcelain", "--untracked-files=no", "--", ".", *DOCUMENTATION_EXCLUDES)
     except (OSError, subprocess.SubprocessError):
         return os.environ.get(COMMIT_VARIABLE) or UNKNOWN, None
     return commit, bool(changed)

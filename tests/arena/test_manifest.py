@@ -6,6 +6,7 @@ stale, and a tournament whose agents changed is not resumed."""
 from __future__ import annotations
 
 import json
+import subprocess
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -199,6 +200,30 @@ def test_the_commit_is_gits_or_named_outside_a_checkout(monkeypatch: pytest.Monk
     monkeypatch.setenv(COMMIT_VARIABLE, "0123abc")
     source_commit.cache_clear()
     assert source_commit() == ("0123abc", None)
+    source_commit.cache_clear()
+
+
+def test_changed_results_and_docs_do_not_count_as_changed_code(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """`make results` publishes one result before racing the next: the published files it has written are no code
+    the next races run, so they leave the manifest clean; an edited source file does not."""
+
+    def git(*args: str) -> None:
+        subprocess.run(["git", "-C", str(tmp_path), "-c", "user.email=t@t", "-c", "user.name=t", *args], check=True)
+
+    (tmp_path / "docs" / "results").mkdir(parents=True)
+    for name in ("code.py", "README.md", "docs/results/table.md"):
+        (tmp_path / name).write_text("before\n")
+    git("init", "-q")
+    git("add", ".")
+    git("commit", "-qm", "start")
+    monkeypatch.setattr(manifest_module, "ROOT", tmp_path.resolve())
+    (tmp_path / "README.md").write_text("after\n")
+    (tmp_path / "docs" / "results" / "table.md").write_text("after\n")
+    source_commit.cache_clear()
+    assert source_commit()[1] is False
+    (tmp_path / "code.py").write_text("after\n")
+    source_commit.cache_clear()
+    assert source_commit()[1] is True
     source_commit.cache_clear()
 
 
