@@ -4,10 +4,11 @@
   the RL tracker (:class:`~controllers.rl.tracker.RLTracker`), which targets the plan's lanes and speeds;
 * ``fixed-rl``: the fixed racing-line planner (:class:`~controllers.fixed_line.FixedLinePlanner`) with the RL
   tracker targeting its lanes at top speed;
-  both brake when over the racing line's speed profile plus 1 m/s, keep their distance to a kart ahead and
-  recover from a stall (the action filters of :mod:`controllers.rl.filters`);
-* ``e2e``: the RL policy alone (checkpoint centres as targets) with the stall recovery, a plain
-  :class:`~controllers.base.Controller`.
+  both brake when over the racing line's speed profile plus 1 m/s, keep their distance to a kart ahead, keep to
+  the lanes their spent lane changes leave, give a kart alongside room and recover from a stall (the action
+  filters of :mod:`controllers.rl.filters`);
+* ``e2e``: the RL policy alone (checkpoint centres as targets) with the same filters but the speed ceiling (it
+  has no line), a plain :class:`~controllers.base.Controller`.
   The paper ran a background MCTS for E2E's delta-r / delta-v metrics only; it is left out here.
 
 Weights come from ``controllers/rl/weights/AGENT/policy.npz`` (shipped; see its ``manifest.json``). The
