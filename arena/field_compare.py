@@ -1,6 +1,6 @@
 """Two field studies of one schedule compared race by race: the agents of a study against a baseline study whose
 race ``i`` had the same track, seed and grid, with some agents swapped for variants (``mcts-rl`` for
-``mcts-rl-traffic-rules``, say). Each race is its own control, so the change in an agent's collisions at fault per
+``mcts-rl-adaptive``, say). Each race is its own control, so the change in an agent's collisions at fault per
 kart-race is measured on the same conditions and the same places on the grid, with a bootstrap interval over
 races.
 

@@ -49,23 +49,17 @@ from controllers.base import Controller
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController, LaneFollowerParams
-from controllers.lq.presets import FIXED_LINE_TRAFFIC_RULES, fixed_line_tracker, mcts_tracker
+from controllers.lq.presets import fixed_line_tracker, mcts_tracker
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of, with_overrides
 from controllers.rl.agents import (
     E2EParams,
-    E2ETrafficRulesParams,
     FixedRLParams,
-    FixedRLTrafficRulesParams,
     MCTSRLAdaptiveParams,
     MCTSRLParams,
-    MCTSRLTrafficRulesParams,
     build_e2e,
-    build_e2e_traffic_rules,
     build_fixed_rl,
-    build_fixed_rl_traffic_rules,
     build_mcts_rl,
     build_mcts_rl_adaptive,
-    build_mcts_rl_traffic_rules,
 )
 from controllers.tactical.high_level import HOLD_GAIN, AdaptiveOpponentParams, MCTSPlanner, TacticalParams
 from sim_core.params import MIN_PACE
@@ -174,12 +168,6 @@ def _fixed_lqng(params: FixedLQNGParams) -> Controller:
     return HierarchicalController("fixed-lqng", planner, tracker)
 
 
-def _fixed_lqng_traffic_rules(params: FixedLQNGParams) -> Controller:
-    planner = FixedLinePlanner(margin=params.line_margin_m)
-    tracker = fixed_line_tracker(params.lqng_horizon_steps, params.speed_scale, FIXED_LINE_TRAFFIC_RULES)
-    return HierarchicalController("fixed-lqng-traffic-rules", planner, tracker)
-
-
 _SPECS: tuple[ControllerSpec[Any], ...] = (
     _spec(
         "mcts-lqng",
@@ -196,15 +184,10 @@ _SPECS: tuple[ControllerSpec[Any], ...] = (
     ),
     _spec(
         "fixed-lqng",
-        "The offline optimised racing line tracked by the LQ Nash game tracker (50 Hz).",
+        "The offline optimised racing line tracked by the LQ Nash game tracker (50 Hz) under mcts-lqng's rules of "
+        "the road: the lanes its lane changes reach, room for a kart alongside, station behind a kart ahead, a "
+        "faster kart let in.",
         _fixed_lqng,
-        FixedLQNGParams,
-    ),
-    _spec(
-        "fixed-lqng-traffic-rules",
-        "fixed-lqng held to mcts-lqng's rules of the road: the lanes its lane changes reach, room for a kart "
-        "alongside, station behind a kart ahead, a faster kart let in.",
-        _fixed_lqng_traffic_rules,
         FixedLQNGParams,
     ),
     _spec(
@@ -215,7 +198,9 @@ _SPECS: tuple[ControllerSpec[Any], ...] = (
     ),
     _spec(
         "mcts-rl",
-        "MCTS tactical planner (1 Hz) tracked by a PPO self-play policy deciding at 25 Hz (the paper's MCTS-RL).",
+        "MCTS tactical planner (1 Hz) tracked by a PPO self-play policy deciding at 25 Hz (the paper's MCTS-RL); "
+        "the tracker keeps its distance to a kart ahead, to the lanes its spent lane changes leave on a straight, "
+        "and never moves sideways into a kart alongside faster than the referee allows.",
         build_mcts_rl,
         MCTSRLParams,
     ),
@@ -228,36 +213,17 @@ _SPECS: tuple[ControllerSpec[Any], ...] = (
     ),
     _spec(
         "fixed-rl",
-        "The offline optimised racing line tracked by a PPO self-play policy deciding at 25 Hz (Fixed-RL).",
+        "The offline optimised racing line tracked by a PPO self-play policy deciding at 25 Hz (Fixed-RL), under "
+        "mcts-rl's traffic rules.",
         build_fixed_rl,
         FixedRLParams,
     ),
     _spec(
         "e2e",
-        "A PPO self-play policy driving end to end at 25 Hz toward the checkpoint centres, no planner (E2E).",
+        "A PPO self-play policy driving end to end at 25 Hz toward the checkpoint centres, no planner (E2E), under "
+        "the hierarchical RL agents' traffic rules.",
         build_e2e,
         E2EParams,
-    ),
-    _spec(
-        "mcts-rl-traffic-rules",
-        "mcts-rl whose tracker keeps to the lanes its spent lane changes leave on a straight and never moves "
-        "sideways into a kart alongside faster than the referee allows (it turns away in time).",
-        build_mcts_rl_traffic_rules,
-        MCTSRLTrafficRulesParams,
-    ),
-    _spec(
-        "fixed-rl-traffic-rules",
-        "fixed-rl whose tracker keeps to the lanes its spent lane changes leave on a straight and never moves "
-        "sideways into a kart alongside faster than the referee allows.",
-        build_fixed_rl_traffic_rules,
-        FixedRLTrafficRulesParams,
-    ),
-    _spec(
-        "e2e-traffic-rules",
-        "e2e held to the hierarchical RL agents' traffic rules: it keeps its distance to a kart ahead in its path, "
-        "to the lanes its spent lane changes leave, and gives room to one alongside.",
-        build_e2e_traffic_rules,
-        E2ETrafficRulesParams,
     ),
 )
 

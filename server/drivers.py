@@ -151,14 +151,20 @@ class KartDriver:
         self.steer, self.throttle, self.applied_seq = received
         self.braking = False
 
-    def take_ai_input(self, latest: tuple[int, float, float] | None, step: int, speed: float, hold_s: float) -> None:
+    def take_ai_input(
+        self, latest: tuple[int, float, float] | None, step: int, speed: float, hold_s: float, *, finished: bool
+    ) -> None:
         """Hold the controller's newest answer ``latest`` (observation step, steer, throttle) at race step
         ``step``, counting a missed deadline when the last observation handed over has no answer yet; brake from
-        ``speed`` [m/s] when disabled, not ready, or without a fresh input for ``hold_s`` [s] of race time."""
+        ``speed`` [m/s] when disabled, not ready, or without a fresh input for ``hold_s`` [s] of race time. A
+        ``finished`` kart is asked nothing more: it holds its last input, as in a headless race (the simulation
+        parks it)."""
         if latest is not None and latest[0] > self.fresh_step:
             self.fresh_step, self.steer, self.throttle = latest
         if self.submitted_step > self.fresh_step:
             self.missed += 1
+        if finished:
+            return
         hold_ticks = max(round(hold_s / DT), 2 * self.every)
         if self.disabled or not self.ready or step - self.fresh_step > hold_ticks:
             self.throttle = brake_throttle(speed)

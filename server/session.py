@@ -332,13 +332,16 @@ class RaceSession:
             self._due[d.index] = (plan, due)
         step = int(world.steps[0])
         speeds = world.fstate[0, :, st.F_SPEED]
+        parked = world.istate[0, :, st.I_FINISHED]  # finished karts
         now = time.monotonic()
         settings = self.settings
         for d in self.drivers:
             if d.human:
                 d.take_human_input(now, float(speeds[d.index]), settings.drive_timeout_s)
             else:
-                d.take_ai_input(self._workers.latest(d.index), step, float(speeds[d.index]), settings.controller_hold_s)
+                latest = self._workers.latest(d.index)
+                hold_s = settings.controller_hold_s
+                d.take_ai_input(latest, step, float(speeds[d.index]), hold_s, finished=bool(parked[d.index]))
             self._actions[0, d.index] = (d.steer, d.throttle)
         self._apply_conditions(step)
         world.step(self._actions)

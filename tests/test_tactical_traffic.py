@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from controllers.base import Controller
 from controllers.hierarchical import HierarchicalController
 from controllers.lq.tracker import LQNGTracker
 from controllers.lq.traffic import AlongsideDiscipline, StationKeeping, Yield
@@ -17,6 +18,8 @@ from controllers.race import RaceSpec, run_race
 from controllers.race_metrics import RaceMetrics
 from controllers.racing_line import optimise_racing_line
 from controllers.registry import make_controller
+from controllers.rl.agents import E2EController
+from controllers.rl.filters import RecoverFromStall
 from controllers.tactical import rules
 from controllers.tactical.calibration import calibrate_tables
 from controllers.tactical.game import GameParams, build_tables
@@ -184,14 +187,15 @@ def test_from_a_spread_start_it_spends_no_more_lane_changes_than_the_rule_allows
     assert tactical.illegal_lane_changes == 0 and tactical.collisions_at_fault == 0
 
 
-def _race_with_tracker(spec: RaceSpec, opponent: str, change: Any = None) -> list[int]:
+def _race_with_tracker(spec: RaceSpec, opponent: str | Controller, change: Any = None) -> list[int]:
     """Collisions at fault of mcts-lqng (kart 0, its traffic rules changed by ``change``: rules -> rules) and of
-    ``opponent`` in the race ``spec``."""
+    ``opponent`` (a registered name, or a driver) in the race ``spec``."""
     driver = make_controller("mcts-lqng")
     assert isinstance(driver, HierarchicalController) and isinstance(driver.tracker, LQNGTracker)
     if change is not None:
         driver.tracker = LQNGTracker(driver.tracker.params, change(driver.tracker.rules))
-    karts = run_race(spec, drivers=[driver, make_controller(opponent)]).result.karts
+    other = make_controller(opponent) if isinstance(opponent, str) else opponent
+    karts = run_race(spec, drivers=[driver, other]).result.karts
     assert all(k.finish_time is not None for k in karts)
     return [k.collisions_at_fault for k in karts]
 
@@ -218,16 +222,20 @@ def test_alongside_in_a_curve_it_does_not_steer_into_the_kart_beside_it() -> Non
 
 
 def test_it_keeps_station_behind_a_kart_drifting_into_its_path() -> None:
-    """A lane-2 start on the oval against e2e (seed 2): following closely, 1.7 m behind e2e and 1.5 m aside, its
-    nose beside e2e's tail, e2e drifts across it. Counting a kart ahead that will be in its path within 0.4 s as in
-    its path, it drops back in time; with no prediction (station keeping's and the yield's) it collides, at fault
-    as the follower."""
+    """A lane-2 start on the oval against the paper's e2e, without traffic rules (seed 2): following closely,
+    1.7 m behind e2e and 1.5 m aside, its nose beside e2e's tail, e2e drifts across it. Counting a kart ahead that
+    will be in its path within 0.4 s as in its path, it drops back in time; with no prediction (station keeping's
+    and the yield's) it collides, at fault as the follower."""
     spec = RaceSpec(track="oval", controllers=("mcts-lqng", "e2e"), seed=2, start_lanes=(2, 3))
-    assert _race_with_tracker(spec, "e2e")[0] == 0
+
+    def drifting() -> Controller:  # the paper's E2E: the policy and its stall recovery, no traffic rules of its own
+        return E2EController(filters=(RecoverFromStall(),))
+
+    assert _race_with_tracker(spec, drifting())[0] == 0
 
     def no_prediction(rules: tuple[Any, ...]) -> tuple[Any, ...]:
         return tuple(
             replace(r, predict_time=0.0) if isinstance(r, StationKeeping) else r for r in _without(Yield)(rules)
         )
 
-    assert _race_with_tracker(spec, "e2e", no_prediction)[0] == 1
+    assert _race_with_tracker(spec, drifting(), no_prediction)[0] == 1

@@ -7,8 +7,8 @@ kart alongside or a pass under way, keeps inside the lanes its lane changes reac
 alongside, keeps station by Gipps' safe speed (2.3 m behind on straights, 3.0 m in curves: it follows 3.0 m behind
 at 14 m/s on a straight and dives inside at the straight's end), lets a kart 2 m/s faster cut in, and steers at most
 5/s. ``fixed-lqng``: the original's heading weight and avoidance scale with the fixed line (1.9, 0.45), a stronger
-denial, the line's own lanes followed to within 1.25 m in traffic as well, and no traffic rules;
-``fixed-lqng-traffic-rules`` the same under mcts-lqng's rules of the road.
+denial, the line's own lanes followed to within 1.25 m in traffic as well, under mcts-lqng's rules of the road
+(the paper's Fixed-LQNG has none: behind two slower karts abreast its game ran into one).
 """
 
 from __future__ import annotations
@@ -43,10 +43,9 @@ MCTS_TRAFFIC: tuple[TrafficRule, ...] = (
 FIXED_LINE_TRACKING = LQNGParams(
     traffic_lane_tolerance=1.25, weights=LQNGWeights(heading=1.9, deny=0.1, avoid_scale=0.45)
 )
-FIXED_LINE_TRAFFIC: tuple[TrafficRule, ...] = ()
-# ``fixed-lqng-traffic-rules``: the fixed line held to mcts-lqng's rules of the road (the lanes its lane changes
-# reach, room alongside, station keeping, a faster kart let in); the rules about driving a plan stay mcts-lqng's
-FIXED_LINE_TRAFFIC_RULES: tuple[TrafficRule, ...] = tuple(
+# the fixed line held to mcts-lqng's rules of the road (the lanes its lane changes reach, room alongside, station
+# keeping, a faster kart let in); the rules about driving a plan stay mcts-lqng's
+FIXED_LINE_TRAFFIC: tuple[TrafficRule, ...] = tuple(
     rule for rule in MCTS_TRAFFIC if isinstance(rule, LaneRuleGuard | AlongsideDiscipline | StationKeeping | Yield)
 )
 
@@ -60,5 +59,5 @@ def fixed_line_tracker(
     horizon: int, speed_scale: float = 1.0, traffic: tuple[TrafficRule, ...] = FIXED_LINE_TRAFFIC
 ) -> LQNGTracker:
     """``fixed-lqng``'s tracker, looking ``horizon`` steps ahead, at ``speed_scale`` of its speed targets, under
-    ``traffic`` (by default none, as the paper's Fixed-LQNG)."""
+    ``traffic`` (by default mcts-lqng's rules of the road)."""
     return LQNGTracker(replace(FIXED_LINE_TRACKING, horizon=horizon, speed_scale=speed_scale), traffic)

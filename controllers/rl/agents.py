@@ -4,10 +4,11 @@
   the RL tracker (:class:`~controllers.rl.tracker.RLTracker`), which targets the plan's lanes and speeds;
 * ``fixed-rl``: the fixed racing-line planner (:class:`~controllers.fixed_line.FixedLinePlanner`) with the RL
   tracker targeting its lanes at top speed;
-  both brake when over the racing line's speed profile plus 1 m/s, keep their distance to a kart ahead and
-  recover from a stall (the action filters of :mod:`controllers.rl.filters`);
-* ``e2e``: the RL policy alone (checkpoint centres as targets) with the stall recovery, a plain
-  :class:`~controllers.base.Controller`.
+  both brake when over the racing line's speed profile plus 1 m/s, keep their distance to a kart ahead, keep to
+  the lanes their spent lane changes leave, give a kart alongside room and recover from a stall (the action
+  filters of :mod:`controllers.rl.filters`);
+* ``e2e``: the RL policy alone (checkpoint centres as targets) with the same filters but the speed ceiling (it
+  has no line), a plain :class:`~controllers.base.Controller`.
   The paper ran a background MCTS for E2E's delta-r / delta-v metrics only; it is left out here.
 
 Weights come from ``controllers/rl/weights/AGENT/policy.npz`` (shipped; see its ``manifest.json``). The
@@ -64,8 +65,18 @@ SIDE_CLEARANCE_HELP = (
 
 
 @dataclass(frozen=True)
-class MCTSRLParams(TacticalParams):
-    """Public parameters of ``mcts-rl``: the tactical planner's (:class:`TacticalParams`) and its tracker's."""
+class TrafficRuleParams:
+    """Public parameters of an RL agent's traffic rules: the room it gives a kart alongside and the lanes it keeps
+    to once a straight's lane changes are spent."""
+
+    side_clearance_m: float = parameter(1.1, SIDE_CLEARANCE_HELP, unit="m", minimum=0.9, maximum=3.0)
+    lane_limit_margin_m: float = parameter(0.15, LANE_LIMIT_MARGIN_HELP, unit="m", minimum=0.0, maximum=0.5)
+
+
+@dataclass(frozen=True)
+class MCTSRLParams(TacticalParams, TrafficRuleParams):
+    """Public parameters of ``mcts-rl``: the tactical planner's (:class:`TacticalParams`), its tracker's and its
+    traffic rules' (:class:`TrafficRuleParams`)."""
 
     lane_change_slack: int = parameter(
         2,
@@ -84,22 +95,8 @@ class MCTSRLAdaptiveParams(MCTSRLParams, AdaptiveOpponentParams):
 
 
 @dataclass(frozen=True)
-class TrafficRuleParams:
-    """Public parameters of an RL agent's traffic rules: the room it gives a kart alongside and the lanes it keeps
-    to once a straight's lane changes are spent."""
-
-    side_clearance_m: float = parameter(1.1, SIDE_CLEARANCE_HELP, unit="m", minimum=0.9, maximum=3.0)
-    lane_limit_margin_m: float = parameter(0.15, LANE_LIMIT_MARGIN_HELP, unit="m", minimum=0.0, maximum=0.5)
-
-
-@dataclass(frozen=True)
-class MCTSRLTrafficRulesParams(MCTSRLParams, TrafficRuleParams):
-    """Public parameters of ``mcts-rl-traffic-rules``: ``mcts-rl``'s and its traffic rules'."""
-
-
-@dataclass(frozen=True)
-class FixedRLParams:
-    """Public parameters of ``fixed-rl``."""
+class FixedRLParams(TrafficRuleParams):
+    """Public parameters of ``fixed-rl``: its line's, its tracker's and its traffic rules'."""
 
     line_margin_m: float = parameter(1.0, LINE_MARGIN_HELP, unit="m", minimum=0.5, maximum=3.0)
     speed_ceiling_margin_mps: float = parameter(1.0, SPEED_CEILING_HELP, unit="m/s", minimum=0.0, maximum=5.0)
@@ -107,43 +104,28 @@ class FixedRLParams:
 
 
 @dataclass(frozen=True)
-class FixedRLTrafficRulesParams(FixedRLParams, TrafficRuleParams):
-    """Public parameters of ``fixed-rl-traffic-rules``: ``fixed-rl``'s and its traffic rules'."""
-
-
-@dataclass(frozen=True)
-class E2EParams:
-    """Public parameters of ``e2e`` (the policy is the whole driver, with the stall recovery)."""
+class E2EParams(TrafficRuleParams):
+    """Public parameters of ``e2e``: how it decides, the distance it keeps and its traffic rules'."""
 
     deterministic: bool = parameter(
         True, "decide by the policy's Gaussian (mean steer, most likely pedal) instead of sampling it (seeded)"
     )
-
-
-@dataclass(frozen=True)
-class E2ETrafficRulesParams(E2EParams, TrafficRuleParams):
-    """Public parameters of ``e2e-traffic-rules``: ``e2e``'s, the distance it keeps and its traffic rules'."""
-
     keep_distance_lookahead_s: float = parameter(0.8, LOOKAHEAD_HELP, unit="s", minimum=0.0, maximum=2.0)
 
 
-def _rl_filters(line_margin: float, ceiling_margin: float, lookahead: float) -> tuple[ActionFilter, ...]:
-    """A hierarchical RL agent's filters: the line's speed ceiling, the distance kept, the stall recovery."""
-    return (LineSpeedCeiling(ceiling_margin, line_margin), KeepDistance(lookahead), RecoverFromStall())
+def _rl_filters(
+    line_margin: float, ceiling_margin: float, lookahead: float, rules: TrafficRuleParams
+) -> tuple[ActionFilter, ...]:
+    """A hierarchical RL agent's filters: the line's speed ceiling, the distance kept, the traffic rules sideways
+    (:func:`_traffic_rules`), the stall recovery last."""
+    ceiling, keep = LineSpeedCeiling(ceiling_margin, line_margin), KeepDistance(lookahead)
+    return (ceiling, keep, *_traffic_rules(rules), RecoverFromStall())
 
 
 def _traffic_rules(rules: TrafficRuleParams) -> tuple[ActionFilter, ...]:
     """An RL agent's sideways traffic rules: the lanes its spent lane changes leave, then room for a kart alongside
     (last: where the two disagree, the room alongside wins)."""
     return (KeepToLaneLimit(rules.lane_limit_margin_m), GiveRoomAlongside(rules.side_clearance_m))
-
-
-def _traffic_rule_filters(
-    line_margin: float, ceiling_margin: float, lookahead: float, rules: TrafficRuleParams
-) -> tuple[ActionFilter, ...]:
-    """The hierarchical RL agent's filters with its traffic rules before the stall recovery."""
-    ceiling, keep, recover = _rl_filters(line_margin, ceiling_margin, lookahead)
-    return (ceiling, keep, *_traffic_rules(rules), recover)
 
 
 def build_mcts_rl(
@@ -163,15 +145,8 @@ def build_mcts_rl(
         planned_speeds_behind=False,
     )
     if filters is None:
-        filters = _rl_filters(1.0, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
+        filters = _rl_filters(1.0, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s, params)
     return HierarchicalController(name, planner, RLTracker("mcts-rl", filters=filters), rate_hz=RL_RATE_HZ)
-
-
-def build_mcts_rl_traffic_rules(params: MCTSRLTrafficRulesParams) -> Controller:
-    """``mcts-rl`` whose tracker keeps to the lanes its lane changes leave (:class:`KeepToLaneLimit`) and gives a
-    kart alongside room (:class:`GiveRoomAlongside`)."""
-    margins = (1.0, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
-    return build_mcts_rl(params, "mcts-rl-traffic-rules", filters=_traffic_rule_filters(*margins, params))
 
 
 def build_mcts_rl_adaptive(params: MCTSRLAdaptiveParams, agent_factory: AgentFactory) -> Controller:
@@ -186,15 +161,9 @@ def build_fixed_rl(
     ``fixed-rl``'s)."""
     planner = FixedLinePlanner(margin=params.line_margin_m)
     if filters is None:
-        filters = _rl_filters(params.line_margin_m, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
+        margins = (params.line_margin_m, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
+        filters = _rl_filters(*margins, params)
     return HierarchicalController(name, planner, RLTracker("fixed-rl", filters=filters), rate_hz=RL_RATE_HZ)
-
-
-def build_fixed_rl_traffic_rules(params: FixedRLTrafficRulesParams) -> Controller:
-    """``fixed-rl`` whose tracker keeps to the lanes its lane changes leave (:class:`KeepToLaneLimit`) and gives a
-    kart alongside room (:class:`GiveRoomAlongside`)."""
-    margins = (params.line_margin_m, params.speed_ceiling_margin_mps, params.keep_distance_lookahead_s)
-    return build_fixed_rl(params, "fixed-rl-traffic-rules", _traffic_rule_filters(*margins, params))
 
 
 class E2EController:
@@ -222,13 +191,8 @@ class E2EController:
 
 
 def build_e2e(params: E2EParams) -> Controller:
-    """The end-to-end agent with the stall recovery."""
-    return E2EController(deterministic=params.deterministic, filters=(RecoverFromStall(),))
-
-
-def build_e2e_traffic_rules(params: E2ETrafficRulesParams) -> Controller:
     """The end-to-end agent held to the hierarchical RL agents' traffic rules: the distance kept to a kart ahead
-    in its path, the lanes its lane changes leave and the room given to one alongside (no speed ceiling: that is
-    a planner's line)."""
+    in its path, the lanes its lane changes leave and the room given to one alongside, then the stall recovery
+    (no speed ceiling: that is a planner's line)."""
     filters = (KeepDistance(params.keep_distance_lookahead_s), *_traffic_rules(params), RecoverFromStall())
-    return E2EController(deterministic=params.deterministic, filters=filters, name="e2e-traffic-rules")
+    return E2EController(deterministic=params.deterministic, filters=filters)

@@ -114,7 +114,7 @@ def test_the_row_effect_pairs_each_kart_with_itself_from_the_other_row() -> None
 
 def test_the_study_races_the_paper_agents_unless_told_others() -> None:
     assert field_spec(2).agents == FIVE
-    assert field_spec(2, agents=("e2e-traffic-rules", "mcts-lqng")).agents == ("e2e-traffic-rules", "mcts-lqng")
+    assert field_spec(2, agents=("e2e", "mcts-lqng")).agents == ("e2e", "mcts-lqng")
     with pytest.raises(KeyError, match="nobody"):
         field_spec(2, agents=("nobody", "mcts-lqng"))
 

@@ -11,8 +11,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from controllers.base import RaceContext
-from controllers.lq.presets import MCTS_TRACKING, MCTS_TRAFFIC, mcts_tracker
+from controllers.base import Controller, RaceContext
+from controllers.fixed_line import FixedLinePlanner
+from controllers.hierarchical import HierarchicalController
+from controllers.lq.presets import MCTS_TRACKING, MCTS_TRAFFIC, fixed_line_tracker, mcts_tracker
 from controllers.lq.tracker import LQNGTracker, within
 from controllers.lq.traffic import (
     AlongsideDiscipline,
@@ -26,6 +28,7 @@ from controllers.lq.traffic import (
 from controllers.plan import Plan, Waypoint
 from controllers.race import Placement, RaceSpec, run_race
 from controllers.racing_line import optimise_racing_line
+from controllers.registry import FixedLQNGParams, make_agent
 from sim_core import state as st
 from sim_core.observation import KartView, observe
 from sim_core.params import DT, PAPER_KART, SimParams
@@ -324,14 +327,22 @@ def test_a_kart_cutting_in_is_let_in_and_without_the_yield_the_follower_hits_it(
 @pytest.mark.parametrize("ego_lane", [1, 2])
 def test_under_the_rules_of_the_road_the_fixed_line_keeps_off_two_slower_karts_abreast(ego_lane: int) -> None:
     """The ego rolls at 10 m/s 8 m behind two karts side by side in lanes 1 and 2 of the oval's straight, both at
-    pace 0.8. The paper's fixed-lqng (its LQ game and no traffic rules) runs into one of them, at fault;
-    ``fixed-lqng-traffic-rules`` keeps station, then passes, untouched."""
+    pace 0.8. The paper's Fixed-LQNG (the fixed line, its LQ game and no traffic rules) runs into one of them, at
+    fault; the registered ``fixed-lqng`` (the same under mcts-lqng's rules of the road) keeps station, then
+    passes, untouched."""
 
-    def faults(ego: str) -> int:
+    def faults(ego: Controller | None) -> int:
         placements = (Placement(5.0, ego_lane, 10.0), Placement(13.0, 1, 10.0), Placement(13.0, 2, 10.0))
         leaders = ("lane-follower@0.8", "lane-follower@0.8")
-        spec = RaceSpec(track="oval", controllers=(ego, *leaders), time_limit=15.0, placements=placements)
-        return run_race(spec).result.karts[0].collisions_at_fault
+        spec = RaceSpec(track="oval", controllers=("fixed-lqng", *leaders), time_limit=15.0, placements=placements)
+        drivers = None if ego is None else [ego, make_agent(leaders[0]), make_agent(leaders[1])]
+        return run_race(spec, drivers=drivers).result.karts[0].collisions_at_fault
 
-    assert faults("fixed-lqng") >= 1
-    assert faults("fixed-lqng-traffic-rules") == 0
+    params = FixedLQNGParams()
+    papers = HierarchicalController(
+        "paper-fixed-lqng",
+        FixedLinePlanner(margin=params.line_margin_m),
+        fixed_line_tracker(params.lqng_horizon_steps, traffic=()),
+    )
+    assert faults(papers) >= 1
+    assert faults(None) == 0

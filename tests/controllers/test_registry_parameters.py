@@ -15,7 +15,7 @@ from support.constant_driver import ConstantDriver
 from controllers.fixed_line import FixedLinePlanner
 from controllers.hierarchical import HierarchicalController
 from controllers.lane_follower import LaneFollowerController
-from controllers.lq.presets import FIXED_LINE_TRACKING, MCTS_TRACKING, MCTS_TRAFFIC
+from controllers.lq.presets import FIXED_LINE_TRACKING, FIXED_LINE_TRAFFIC, MCTS_TRACKING, MCTS_TRAFFIC
 from controllers.lq.tracker import LQNGTracker
 from controllers.parameters import Parameter, ParameterError, parameter, parameters_of
 from controllers.registry import (
@@ -29,7 +29,8 @@ from controllers.registry import (
     validate_agent,
     validate_parameters,
 )
-from controllers.rl.filters import KeepDistance, LineSpeedCeiling, RecoverFromStall
+from controllers.rl.agents import E2EController
+from controllers.rl.filters import GiveRoomAlongside, KeepDistance, KeepToLaneLimit, LineSpeedCeiling, RecoverFromStall
 from controllers.rl.tracker import RLTracker
 from controllers.tactical.game import GameParams
 from controllers.tactical.high_level import MCTSPlanner, TacticalParams
@@ -69,6 +70,8 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
         "lane_change_slack": "2",
         "speed_ceiling_margin_mps": "1.0",
         "keep_distance_lookahead_s": "0.8",
+        "side_clearance_m": "1.1",
+        "lane_limit_margin_m": "0.15",
     }
     assert dict(REGISTRY["fixed-lqng"].parameters) == {
         "line_margin_m": "1.0",
@@ -78,11 +81,12 @@ def test_the_published_defaults_keep_the_documented_names() -> None:
 
 
 def test_the_hierarchical_agents_publish_few_parameters_and_share_the_tactical_ones() -> None:
-    """A public parameter is a quantity to vary, not a version: at most 7 for mcts-lqng and 8 for mcts-rl, the
-    tactical planner's declared once (TacticalParams) for both."""
+    """A public parameter is a quantity to vary, not a version: at most 7 for mcts-lqng and 10 for mcts-rl (its
+    tracker's filters and the two traffic rules' margins), the tactical planner's declared once
+    (TacticalParams) for both."""
     lqng, rl = REGISTRY["mcts-lqng"].params_type, REGISTRY["mcts-rl"].params_type
     assert lqng is not None and rl is not None
-    assert len(dataclasses.fields(lqng)) <= 7 and len(dataclasses.fields(rl)) <= 8
+    assert len(dataclasses.fields(lqng)) <= 7 and len(dataclasses.fields(rl)) <= 10
     assert issubclass(lqng, TacticalParams) and issubclass(rl, TacticalParams)
     for name in controller_names():
         spec = REGISTRY[name]
@@ -121,12 +125,29 @@ def test_overrides_reach_the_parts_that_use_them() -> None:
     assert isinstance(narrow, HierarchicalController) and isinstance(narrow.tracker, LQNGTracker)
     assert narrow.tracker.params.horizon == 9 and make_controller("fixed-lqng").tracker.params.horizon == 4  # type: ignore[attr-defined]
     for name in ("mcts-rl", "fixed-rl"):
-        shielded = make_controller(name, speed_ceiling_margin_mps=2.0, keep_distance_lookahead_s=0.4)
+        shielded = make_controller(
+            name,
+            speed_ceiling_margin_mps=2.0,
+            keep_distance_lookahead_s=0.4,
+            side_clearance_m=1.5,
+            lane_limit_margin_m=0.3,
+        )
         assert isinstance(shielded, HierarchicalController) and isinstance(shielded.tracker, RLTracker)
-        ceiling, distance, recovery = shielded.tracker.filters
+        ceiling, distance, lanes, alongside, recovery = shielded.tracker.filters
         assert isinstance(ceiling, LineSpeedCeiling) and ceiling.margin == 2.0
         assert isinstance(distance, KeepDistance) and distance.lookahead == 0.4
+        assert isinstance(lanes, KeepToLaneLimit) and lanes.margin == 0.3
+        assert isinstance(alongside, GiveRoomAlongside) and alongside.clearance == 1.5
         assert isinstance(recovery, RecoverFromStall)
+    e2e = make_controller("e2e", keep_distance_lookahead_s=0.5)
+    assert isinstance(e2e, E2EController)
+    assert [type(f) for f in e2e.tracker.filters] == [
+        KeepDistance,
+        KeepToLaneLimit,
+        GiveRoomAlongside,
+        RecoverFromStall,
+    ]
+    assert e2e.tracker.filters[0].lookahead == 0.5  # type: ignore[attr-defined]
     fixed_rl = make_controller("fixed-rl", line_margin_m=1.5)
     assert isinstance(fixed_rl, HierarchicalController) and isinstance(fixed_rl.tracker, RLTracker)
     assert fixed_rl.tracker.filters[0].line_margin == 1.5  # type: ignore[attr-defined]
@@ -149,9 +170,14 @@ def test_defaults_build_the_tuned_drivers() -> None:
     assert (search.iterations, search.rate_hz) == (2000, 1.0)
     fixed = make_controller("fixed-lqng")
     assert isinstance(fixed, HierarchicalController) and isinstance(fixed.tracker, LQNGTracker)
-    assert fixed.tracker.params == FIXED_LINE_TRACKING and fixed.tracker.rules == ()
+    assert fixed.tracker.params == FIXED_LINE_TRACKING and fixed.tracker.rules == FIXED_LINE_TRAFFIC
     e2e = make_controller("e2e")
-    assert [type(f).__name__ for f in e2e.tracker.filters] == ["RecoverFromStall"]  # type: ignore[attr-defined]
+    assert [type(f).__name__ for f in e2e.tracker.filters] == [  # type: ignore[attr-defined]
+        "KeepDistance",
+        "KeepToLaneLimit",
+        "GiveRoomAlongside",
+        "RecoverFromStall",
+    ]
 
 
 @pytest.mark.parametrize(

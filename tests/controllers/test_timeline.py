@@ -22,7 +22,7 @@ from controllers.timeline import (
 )
 from sim_core.params import SimParams, kart_preset
 
-SPEC = RaceSpec(track="oval", controllers=("fixed-lqng", "lane-follower"), laps=2, seed=3, start_lanes=(3, 2))
+SPEC = RaceSpec(track="oval", controllers=("mcts-lqng", "lane-follower"), laps=2, seed=3, start_lanes=(3, 2))
 
 
 @pytest.fixture(scope="module")

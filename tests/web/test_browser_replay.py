@@ -35,18 +35,19 @@ pytestmark = [requires_chromium, pytest.mark.slow]
 
 @pytest.fixture(scope="module")
 def finished_race(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, str]]:
-    """(base URL, race id) of a finished two-lap race (the lane follower against Fixed-LQNG on the oval, teams
-    Blue and Red, run at 20x) on the real server with 3D views on."""
+    """(base URL, race id) of a finished two-lap race with a collision and a pass (the lane follower from lane 2
+    against MCTS-LQNG from lane 3 behind it on the oval, teams Blue and Red, run at 20x in lockstep, so the race is
+    its seed's) on the real server with 3D views on."""
     from support.live_server import start_race, wait_status
 
     db = tmp_path_factory.mktemp("browser-replay") / "karting.db"
-    settings = server_settings(db, viewer_enabled=True, speedup=20.0, keep_finished_s=1.0)
+    settings = server_settings(db, viewer_enabled=True, speedup=20.0, keep_finished_s=1.0, lockstep=True)
     with LiveServer(settings) as server, server.client() as client:
         karts = [
             {"controller": "lane-follower", "name": "LF", "team": "Blue"},
-            {"controller": "fixed-lqng", "name": "Fixed", "team": "Red"},
+            {"controller": "mcts-lqng", "name": "MCTS", "team": "Red"},
         ]
-        race = start_race(client, track="oval", laps=2, seed=1, karts=karts)
+        race = start_race(client, track="oval", laps=2, seed=3, start_lanes=[2, 3], karts=karts)
         wait_status(client, race["id"], ("finished",), 120)
         yield server.url, str(race["id"])
 
