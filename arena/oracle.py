@@ -26,7 +26,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from arena.scenarios import Attempt, Cell, CellFigures, Scenario, attempt_specs, judge
+from arena.scenario_setups import Attempt, attempt_specs, judge
+from arena.scenarios import TWO_KART_KINDS, Cell, CellFigures, Scenario
 from arena.tournament import start_method
 from controllers.base import Controller, HighLevelPlanner, RaceContext
 from controllers.fixed_line import FixedLinePlanner
@@ -198,6 +199,12 @@ def run_oracle_cell(scenario: Scenario, cell: Cell, attempts: int, seed: int, se
     return CellFigures.of(replace(cell, ego=ORACLE), results)
 
 
+def check_two_karts(scenario: Scenario) -> None:
+    """``ValueError`` unless ``scenario`` races the ego against one opponent (the oracle's branches race two)."""
+    if scenario.kind not in TWO_KART_KINDS:
+        raise ValueError(f"the oracle races two karts: {scenario.name!r} is a {scenario.kind!r} scenario")
+
+
 def run_oracle_cells(
     scenario: Scenario,
     cells: Sequence[Cell],
@@ -207,7 +214,9 @@ def run_oracle_cells(
     workers: int = 1,
     progress: Callable[[int, int], None] | None = None,
 ) -> list[CellFigures]:
-    """The oracle's figures on every cell (one worker process per cell with ``workers`` above 1)."""
+    """The oracle's figures on every cell (one worker process per cell with ``workers`` above 1); ``ValueError``
+    for a scenario of more than two karts (its branches race the ego against one opponent)."""
+    check_two_karts(scenario)
     settings = settings or OracleSettings()
     if workers <= 1 or len(cells) <= 1:
         out = []

@@ -14,16 +14,27 @@ from controllers.registry import without_pace
 from sim_core.conditions import condition_set
 
 SUMMARY_FILE, REPORT_FILE, MANIFEST_FILE = "summary.json", "README.md", "manifest.json"
+# what success means, by scenario kind (arena.scenario_setups.judge); overtake and defend are always explained
+SUCCESS = {
+    "overtake": "overtake, the ego passed (held the place 2 s) and is ahead at the end",
+    "defend": "defend, the ego is still ahead at the end",
+    "side-by-side": "side by side, the ego is ahead of the opponent at the end",
+    "lapping": "lapping, the ego passed the slower kart and is ahead of it and the opponent at the end",
+    "start": "start, the ego leads the field at the end",
+}
 
 
 def _interval(ci: list[float] | None) -> str:
     return "" if ci is None else f" [{ci[0]:.2f}, {ci[1]:.2f}]"
 
 
-def cell_row(cell: dict[str, Any]) -> list[str]:
+def cell_row(cell: dict[str, Any], with_place: bool = False) -> list[str]:
     """One summary cell (:meth:`CellFigures.to_json`) as table text: scenario, track, ego, opponent, pace, attempts,
-    success with its interval, time to pass, collisions at fault and illegal lane changes per attempt."""
+    success with its interval, time to pass, collisions at fault and illegal lane changes per attempt, and with
+    ``with_place`` the ego's mean place at the end with its interval."""
     to_pass = "" if cell["time_to_pass"] is None else f"{cell['time_to_pass']:.1f}"
+    place = cell.get("mean_place")
+    places = [""] if place is None else [f"{place:.2f}{_interval(cell.get('mean_place_ci95'))}"]
     return [
         cell["scenario"],
         cell["track"],
@@ -35,7 +46,14 @@ def cell_row(cell: dict[str, Any]) -> list[str]:
         to_pass,
         f"{cell['collisions_at_fault_per_attempt']:.2f}{_interval(cell['collisions_ci95'])}",
         f"{cell['illegal_lane_changes_per_attempt']:.2f}{_interval(cell['illegal_lane_changes_ci95'])}",
+        *(places if with_place else []),
     ]
+
+
+def shows_place(summary: dict[str, Any]) -> bool:
+    """Whether the ego's place is worth a column: not for two karts placed in line (overtake, defend), whose place
+    is the success."""
+    return bool({scenario["kind"] for scenario in summary["scenarios"].values()} - {"overtake", "defend"})
 
 
 def markdown_report(
@@ -55,6 +73,11 @@ def markdown_report(
         "collisions at fault / attempt",
         "illegal lane changes / attempt",
     ]
+    kinds = {scenario["kind"] for scenario in summary["scenarios"].values()}
+    with_place = shows_place(summary)
+    if with_place:
+        head.append("ego's place [95% CI]")
+    success = "; ".join(text for kind, text in SUCCESS.items() if kind in kinds | {"overtake", "defend"})
     took = "" if wall_seconds is None else f" ({wall_seconds / 60:.0f} minutes here)"
     subcommand = summary.get("subcommand", "run")
     thresholds = [
@@ -67,8 +90,7 @@ def markdown_report(
         "",
         f"Regenerate: `karting scenarios {subcommand} {summary.get('command', '...')}`{took}.",
         "",
-        "Success: overtake, the ego passed (held the place 2 s) and is ahead at the end; defend, the ego is still "
-        "ahead at the end. Intervals: Wilson for rates, bootstrap for means.",
+        f"Success: {success}. Intervals: Wilson for rates, bootstrap for means.",
         "",
     ]
     if "oracle" in summary:
@@ -82,7 +104,7 @@ def markdown_report(
             "",
         ]
     lines += [
-        markdown_table([head, *(cell_row(cell) for cell in summary["cells"])]),
+        markdown_table([head, *(cell_row(cell, with_place) for cell in summary["cells"])]),
         "",
         "## Pass threshold r50",
         "",

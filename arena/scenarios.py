@@ -2,13 +2,21 @@
 intervals (the passing contests of racing robotics: an overtaking success rate against a leader of a given pace,
 and the pace at which passes stop succeeding).
 
-A :class:`Scenario` is data (a JSON file: the shipped ones in ``scenarios/``, or a user's own):
+A :class:`Scenario` is data (a JSON file: the shipped ones in ``scenarios/``, or a user's own). Its ``kind`` says
+where the karts start (:mod:`arena.scenario_setups`), which kart the cell's pace handicaps and what counts as a
+success (:func:`arena.scenario_setups.judge`):
 
-* ``overtake``: the ego starts ``gap_m`` behind a leader, both rolling in the racing lane at the leader's line
-  speed, on a straight or before a corner (``place``); the leader drives at each pace of ``paces``. Success: the
-  ego passed (held the place 2 s, the referee's count) and is ahead at the end;
+* ``overtake``: the ego starts ``gap_m`` behind a leader at each pace of ``paces``, both rolling in the racing
+  lane, on a straight or before a corner (``place``). Success: the ego passed (held the place 2 s, the referee's
+  count) and is ahead at the end;
 * ``defend``: the ego leads at each pace of ``paces`` with a full-pace attacker ``gap_m`` behind. Success: the
-  ego is still ahead at the end (the place held).
+  ego is still ahead at the end (the place held);
+* ``side-by-side``: the ego and the opponent (at each pace of ``paces``) abreast into a corner, the ego inside
+  in even attempts and outside in odd ones. Success: the ego is ahead at the end;
+* ``lapping``: the ego behind a slower kart (``backmarker`` at each pace of ``paces``) with the opponent at full
+  pace close behind it. Success: the ego passed the slower kart and is ahead of both at the end;
+* ``start``: ``karts`` karts from a standing start, the ego and copies of the opponent (at each pace of
+  ``paces``), the ego in each grid lane in turn. Success: the ego leads at the end; its mean place is reported.
 
 A cell is (scenario, track, ego, opponent, pace); attempt ``i`` of every cell of a scenario on a track has the
 same seed, so the same gap and conditions (a paired design across egos, opponents and paces).
@@ -27,26 +35,22 @@ from typing import Any, Literal
 import numpy as np
 
 from arena.intervals import Interval, bootstrap_mean, wilson
+from arena.scenario_setups import Attempt, attempt_specs, judge
 from arena.tournament import start_method
-from controllers.race import Placement, RaceOutcome, RaceSpec, batch_key, load_any_track, run_races
-from controllers.racing_line import optimise_racing_line
+from controllers.race import RaceSpec, batch_key, run_races
 from controllers.registry import PACE_SEPARATOR, validate_agent
 from sim_core import state as st
 from sim_core.conditions import CONDITION_SETS
-from sim_core.params import DT, MIN_PACE, PAPER_KART
-from sim_core.state import PASS_HOLD_STEPS
-from sim_core.track import Track
-from sim_core.world import World
+from sim_core.params import MIN_PACE
+from sim_core.world import DEFAULT_START_LANES, World
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent / "scenarios"
-Kind = Literal["overtake", "defend"]
-KINDS: tuple[Kind, ...] = ("overtake", "defend")
+Kind = Literal["overtake", "defend", "side-by-side", "lapping", "start"]
+KINDS: tuple[Kind, ...] = ("overtake", "defend", "side-by-side", "lapping", "start")
+TWO_KART_KINDS: tuple[Kind, ...] = ("overtake", "defend", "side-by-side")  # the ego and one opponent
 Place = Literal["straight", "corner"]
 PLACES: tuple[Place, ...] = ("straight", "corner")
-STRAIGHT_CURVATURE = 1.0 / 150.0  # [1/m] the centre line is straight where it turns more gently than this
-STRAIGHT_ENTRY = 20.0  # [m] "straight": the leader this far into the track's longest straight
-CORNER_BEFORE = 35.0  # [m] "corner": the leader this far before the end of the longest straight
-ROLLING_FRACTION = 0.9  # of the leader's line speed there: both karts roll in at this speed
+ABREAST_M = 3.0  # [m] side by side: the ego at most this far ahead of or behind the opponent
 
 
 @dataclass(frozen=True)
@@ -58,10 +62,16 @@ class Scenario:
     description: str = ""
     tracks: tuple[str, ...] = ("oval", "complex")
     place: Place = "straight"
-    gap_m: tuple[float, float] = (10.0, 20.0)  # [m] between the two karts, uniform per attempt
-    paces: tuple[float, ...] = (0.90, 0.93, 0.95, 0.97, 0.99)  # overtake: the leader's; defend: the ego's
+    # [m] uniform per attempt: between the two karts (side by side: the ego behind the opponent, negative: ahead)
+    gap_m: tuple[float, float] = (10.0, 20.0)
+    # the paced kart's pace: overtake, the leader's; defend, the ego's; lapping, the slower kart's; otherwise the
+    # opponent's
+    paces: tuple[float, ...] = (0.90, 0.93, 0.95, 0.97, 0.99)
     laps: int = 3  # from the placement; a pass must be done within them
     conditions: str = "varied"
+    backmarker: str = "fixed-lqng"  # lapping: the slower kart's agent
+    rival_gap_m: tuple[float, float] = (3.0, 6.0)  # [m] lapping: the opponent behind the ego, uniform per attempt
+    karts: int = 4  # start: the field (the ego and copies of the opponent), one per grid lane
 
     def __post_init__(self) -> None:
         problems = self.problems()
@@ -76,7 +86,10 @@ class Scenario:
         if self.place not in PLACES:
             found.append(f"place must be one of {list(PLACES)}, got {self.place!r}")
         low, high = self.gap_m
-        if not 2.5 <= low <= high <= 60.0:
+        if self.kind == "side-by-side":
+            if not -ABREAST_M <= low <= high <= ABREAST_M:
+                found.append(f"gap_m must be -{ABREAST_M:g} <= low <= high <= {ABREAST_M:g} m, got {list(self.gap_m)}")
+        elif not 2.5 <= low <= high <= 60.0:
             found.append(f"gap_m must be 2.5 <= low <= high <= 60 m, got {list(self.gap_m)}")
         if not self.paces or any(not MIN_PACE <= p <= 1.0 for p in self.paces):
             found.append(f"paces must be in [{MIN_PACE}, 1], got {list(self.paces)}")
@@ -86,6 +99,23 @@ class Scenario:
             found.append(f"conditions must be one of {sorted(CONDITION_SETS)}, got {self.conditions!r}")
         if not self.tracks:
             found.append("tracks must name at least one track")
+        found += self._kind_problems()
+        return found
+
+    def _kind_problems(self) -> list[str]:
+        found = []
+        if self.kind == "lapping":
+            low, high = self.rival_gap_m
+            if not 2.5 <= low <= high <= 60.0:
+                found.append(f"rival_gap_m must be 2.5 <= low <= high <= 60 m, got {list(self.rival_gap_m)}")
+            try:
+                validate_agent(self.backmarker)
+            except (KeyError, ValueError) as error:
+                found.append(f"backmarker: {error}")
+            if PACE_SEPARATOR in self.backmarker:
+                found.append(f"backmarker {self.backmarker!r} carries its own pace: the scenario's paces set it")
+        if self.kind == "start" and not 2 <= self.karts <= len(DEFAULT_START_LANES):
+            found.append(f"karts must be in 2..{len(DEFAULT_START_LANES)} (one per grid lane), got {self.karts}")
         return found
 
     @classmethod
@@ -95,7 +125,7 @@ class Scenario:
         if unknown:
             raise ValueError(f"scenario {data.get('name')!r}: unknown fields {sorted(unknown)}")
         values = dict(data)
-        for name in ("tracks", "gap_m", "paces"):
+        for name in ("tracks", "gap_m", "paces", "rival_gap_m"):
             if name in values:
                 values[name] = tuple(values[name])
         return cls(**values)
@@ -131,10 +161,17 @@ class Cell:
     pace: float
 
     def agents(self, kind: Kind) -> tuple[str, str]:
-        """(ego, opponent) agent strings with the pace on the kart it handicaps."""
-        if kind == "overtake":
-            return self.ego, with_pace(self.opponent, self.pace)
-        return with_pace(self.ego, self.pace), self.opponent
+        """(ego, opponent) agent strings with the pace on the kart it handicaps (lapping: on neither, the slower
+        kart is :meth:`paced`)."""
+        if kind == "defend":
+            return with_pace(self.ego, self.pace), self.opponent
+        if kind == "lapping":
+            return with_pace(self.ego, 1.0), with_pace(self.opponent, 1.0)
+        return self.ego, with_pace(self.opponent, self.pace)
+
+    def paced(self, agent: str) -> str:
+        """``agent`` at the cell's pace."""
+        return with_pace(agent, self.pace)
 
 
 def with_pace(agent: str, pace: float) -> str:
@@ -142,106 +179,6 @@ def with_pace(agent: str, pace: float) -> str:
     if PACE_SEPARATOR in agent:
         raise ValueError(f"agent {agent!r} carries its own pace: a scenario sets it")
     return agent if pace == 1.0 else f"{agent}{PACE_SEPARATOR}{pace:g}"
-
-
-def longest_straight(track: Track) -> tuple[float, float]:
-    """(start, end) [m] of centre-line progress of the track's longest straight (end may exceed the length when it
-    runs over the line)."""
-    straight = np.abs(track.centre_curvature) < STRAIGHT_CURVATURE
-    if straight.all() or not straight.any():
-        return 0.0, float(track.length)
-    s = track.centre_s
-    start = int(np.argmin(straight))  # a sample in a corner: runs are counted from there, wrapping once
-    best, best_run, run_start = (0.0, 0.0), -1.0, None
-    n = len(s)
-    for step in range(1, n + 1):
-        i = (start + step) % n
-        here = s[i] + (track.length if start + step >= n else 0.0)
-        if straight[i] and run_start is None:
-            run_start = here
-        elif not straight[i] and run_start is not None:
-            if here - run_start > best_run:
-                best, best_run = (run_start, here), here - run_start
-            run_start = None
-    return float(best[0]), float(best[1])
-
-
-def placements(scenario: Scenario, track: Track, gap: float, leader_pace: float) -> tuple[Placement, Placement]:
-    """(leader's, follower's) placement: rolling in the racing lane at the scenario's place, ``gap`` apart."""
-    start, end = longest_straight(track)
-    lead_s = start + STRAIGHT_ENTRY if scenario.place == "straight" else end - CORNER_BEFORE
-    lead_s = max(lead_s, start + gap + 1.0) % track.length  # the follower on the straight too
-    line = optimise_racing_line(track, PAPER_KART)
-    speed = ROLLING_FRACTION * leader_pace * float(line.speed_at(float(lead_s)))
-    lane = _racing_lane_at(track, lead_s)
-    return Placement(lead_s, lane, speed), Placement(lead_s - gap, lane, speed)  # (behind the line: lap -1)
-
-
-def race_laps(scenario: Scenario, track: Track, lead: Placement) -> int:
-    """The race's laps: it ends at the line, so a start in the second half of a lap races one lap more and every
-    attempt drives the scenario's laps within half a lap."""
-    return scenario.laps + (1 if lead.progress % track.length > 0.5 * track.length else 0)
-
-
-def _racing_lane_at(track: Track, s: float) -> int:
-    section = int(np.searchsorted(track.checkpoint_s, s, side="right")) - 1
-    lane = track.racing_lanes[section % track.n_checkpoints]
-    return int(lane) if lane is not None else 2
-
-
-def attempt_seed(scenario: str, track: str, attempt: int, seed: int) -> int:
-    """Attempt ``attempt``'s seed: the same for every cell of the scenario on the track (paired cells)."""
-    digest = [ord(c) for c in f"{scenario}/{track}"]
-    return int(np.random.SeedSequence([seed, attempt, *digest]).generate_state(1)[0] % 2**31)
-
-
-def attempt_specs(scenario: Scenario, cell: Cell, attempts: int, seed: int = 0, first: int = 0) -> list[RaceSpec]:
-    """The races of attempts ``first`` to ``first + attempts - 1`` of ``cell`` (the ego is kart 0)."""
-    track = load_any_track(cell.track)
-    ego, opponent = cell.agents(scenario.kind)
-    leader_pace = cell.pace if scenario.kind == "overtake" else 1.0
-    specs = []
-    for i in range(first, first + attempts):
-        race_seed = attempt_seed(scenario.name, cell.track, i, seed)
-        gap = float(np.random.default_rng([race_seed, 0x6A9]).uniform(*scenario.gap_m))
-        lead, follow = placements(scenario, track, gap, leader_pace)
-        ego_at, opponent_at = (follow, lead) if scenario.kind == "overtake" else (lead, follow)
-        specs.append(
-            RaceSpec(
-                track=cell.track,
-                controllers=(ego, opponent),
-                laps=race_laps(scenario, track, lead),
-                seed=race_seed,
-                conditions=scenario.conditions,
-                placements=(ego_at, opponent_at),
-            )
-        )
-    return specs
-
-
-@dataclass(frozen=True)
-class Attempt:
-    """What one attempt gave the ego (kart 0)."""
-
-    success: bool  # overtake: passed and ahead at the end; defend: still ahead at the end
-    time_to_pass: float | None  # [s] from the start until the ego took the place it then held (overtake)
-    collisions_at_fault: int
-    illegal_lane_changes: int
-    opponent_collisions_at_fault: int
-
-
-def judge(kind: Kind, outcome: RaceOutcome, first_pass_step: int | None) -> Attempt:
-    """The ego's attempt from its race's result; ``first_pass_step``: the step its first pass counted."""
-    ego, opponent = outcome.result.karts
-    ahead = ego.position < opponent.position
-    passed = ego.passes > 0
-    time_to_pass = None
-    if kind == "overtake" and first_pass_step is not None:
-        time_to_pass = max(first_pass_step + 1 - PASS_HOLD_STEPS, 0) * DT  # the place was taken 2 s before
-    success = (passed and ahead) if kind == "overtake" else ahead
-    return Attempt(
-        success, time_to_pass, ego.collisions_at_fault, ego.illegal_lane_changes, opponent.collisions_at_fault
-    )
 
 
 @dataclass(frozen=True)
@@ -260,6 +197,8 @@ class CellFigures:
     illegal_lane_changes_per_attempt: float
     illegal_lane_changes_ci95: Interval | None
     opponent_collisions_at_fault_per_attempt: float
+    mean_place: float | None = None  # the ego's place at the end (1: ahead of every kart), over the attempts
+    mean_place_ci95: Interval | None = None
 
     @classmethod
     def of(cls, cell: Cell, attempts: Sequence[Attempt]) -> CellFigures:
@@ -269,6 +208,7 @@ class CellFigures:
         times = [a.time_to_pass for a in attempts if a.success and a.time_to_pass is not None]
         faults = [float(a.collisions_at_fault) for a in attempts]
         lanes = [float(a.illegal_lane_changes) for a in attempts]
+        places = [float(a.place) for a in attempts if a.place is not None]
         return cls(
             cell,
             n,
@@ -282,12 +222,14 @@ class CellFigures:
             float(np.mean(lanes)) if n else 0.0,
             bootstrap_mean(lanes),
             float(np.mean([a.opponent_collisions_at_fault for a in attempts])) if n else 0.0,
+            float(np.mean(places)) if places else None,
+            bootstrap_mean(places),
         )
 
     def to_json(self) -> dict[str, Any]:
         """The cell and its figures (the keys ``karting scenarios run --json`` prints)."""
         data = {**asdict(self.cell), **{k: v for k, v in asdict(self).items() if k != "cell"}}
-        for key in ("ci95", "time_to_pass_ci95", "collisions_ci95", "illegal_lane_changes_ci95"):
+        for key in ("ci95", "time_to_pass_ci95", "collisions_ci95", "illegal_lane_changes_ci95", "mean_place_ci95"):
             interval = getattr(self, key)
             data[key] = None if interval is None else [interval.low, interval.high]
         return data

@@ -120,13 +120,15 @@ def oracle(
     """The oracle bound (:mod:`arena.oracle`): the same attempts as ``run``, the ``--base`` agent as the ego with
     each of its plans replaced by whichever of it and its held-lane variants ends furthest ahead when raced forward
     in the simulator against the opponent's own controller."""
-    from arena.oracle import ORACLE, OracleSettings, oracle_driver, run_oracle_cells
+    from arena.oracle import ORACLE, OracleSettings, check_two_karts, oracle_driver, run_oracle_cells
     from arena.scenarios import Cell, SuiteResult, load_scenario
     from controllers.registry import validate_agent
     from sim_core.params import MIN_PACE
 
     try:
         loaded = [load_scenario(name) for name in _split(scenarios)]
+        for scenario in loaded:
+            check_two_karts(scenario)
         for opponent in _split(opponents):
             validate_agent(opponent)
         settings = OracleSettings(lookahead_s=lookahead, base=base)
@@ -246,8 +248,9 @@ def report(
 
 
 def _show(summary: dict[str, Any]) -> None:
-    from arena.scenario_report import cell_row
+    from arena.scenario_report import cell_row, shows_place
 
+    with_place = shows_place(summary)
     columns = [
         "scenario",
         "track",
@@ -259,10 +262,11 @@ def _show(summary: dict[str, Any]) -> None:
         "to pass [s]",
         "faults",
         "illegal",
+        *(["place [95% CI]"] if with_place else []),
     ]
     shown = table("cells", columns, keys=["ego", "opponent"], numeric=["pace", "n", "to pass [s]"])
     for cell in summary["cells"]:
-        add_row(shown, *cell_row(cell))
+        add_row(shown, *cell_row(cell, with_place))
     console.print(shown)
     thresholds = table(
         "pass threshold r50 (highest leader pace passed in half the attempts)", ["ego", "opponent", "r50"]

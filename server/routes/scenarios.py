@@ -39,6 +39,9 @@ class ScenarioOut(BaseModel):
     paces: list[float]
     laps: int
     conditions: str
+    backmarker: str = Field(description="lapping: the slower kart's agent")
+    rival_gap_m: list[float] = Field(description="lapping: the opponent's distance behind the ego [m]")
+    karts: int = Field(description="start: karts on the grid")
 
 
 class ScenarioRunIn(BaseModel):

@@ -11,18 +11,15 @@ import pytest
 
 from arena.intervals import wilson
 from arena.scenario_report import beside_oracle, markdown_report
+from arena.scenario_setups import Attempt, attempt_specs, longest_straight, placements
 from arena.scenarios import (
-    Attempt,
     Cell,
     CellFigures,
     Scenario,
     SuiteResult,
-    attempt_specs,
     cells_of,
     load_scenario,
-    longest_straight,
     pass_thresholds,
-    placements,
     run_cells,
     shipped_scenarios,
 )

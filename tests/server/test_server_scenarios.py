@@ -20,6 +20,7 @@ def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[httpx.Client]:
 def test_the_shipped_scenarios_are_listed(client: httpx.Client) -> None:
     listed = {s["name"]: s for s in client.get("/api/scenarios").json()}
     assert listed["overtake-straight"]["kind"] == "overtake" and listed["defend-straight"]["paces"] == [0.97]
+    assert listed["lapping-straight"]["backmarker"] == "fixed-lqng" and listed["start-4-karts"]["karts"] == 4
 
 
 @pytest.mark.parametrize(

@@ -55,7 +55,8 @@ function cellRow(c) {
     el("td", {}, `${fmtNumber(c.pass_success, 2)}${interval(c.ci95)}`),
     el("td", {}, c.time_to_pass === null ? "–" : fmtNumber(c.time_to_pass, 1)),
     el("td", {}, `${fmtNumber(c.collisions_at_fault_per_attempt, 2)}${interval(c.collisions_ci95)}`),
-    el("td", {}, `${fmtNumber(c.illegal_lane_changes_per_attempt, 2)}${interval(c.illegal_lane_changes_ci95)}`));
+    el("td", {}, `${fmtNumber(c.illegal_lane_changes_per_attempt, 2)}${interval(c.illegal_lane_changes_ci95)}`),
+    el("td", {}, c.mean_place == null ? "–" : `${fmtNumber(c.mean_place, 2)}${interval(c.mean_place_ci95)}`));
 }
 
 function show(runId) {
