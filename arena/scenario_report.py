@@ -161,10 +161,12 @@ def publish(
     beside: Sequence[dict[str, Any]] = (),
 ) -> None:
     """Write ``summary`` into ``folder``: the summary JSON, its Markdown report (with the summaries ``beside``
-    compared cell by cell, for an oracle's) and a manifest of the code, the agents (every parameter, the trained
-    weights), the condition sets, the machine and the wall time."""
+    compared cell by cell, for an oracle's) and a manifest of the code, the agents (``agents`` and the lapping
+    scenarios' slower karts: every parameter, the trained weights), the condition sets, the machine and the wall
+    time."""
     folder.mkdir(parents=True, exist_ok=True)
-    described = [describe_agent(a) for a in sorted({without_pace(a) for a in agents})]
+    backmarkers = [s["backmarker"] for s in summary["scenarios"].values() if s["kind"] == "lapping"]
+    described = [describe_agent(a) for a in sorted({without_pace(a) for a in (*agents, *backmarkers)})]
     sets = sorted({s["conditions"] for s in summary["scenarios"].values()})
     conditions = {"condition_sets": {name: condition_set(name).to_json() for name in sets}}
     manifest = build_manifest("scenarios", described, "paper", conditions).to_json()

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from arena.oracle import run_oracle_cells
-from arena.scenario_report import markdown_report
+from arena.scenario_report import markdown_report, publish
 from arena.scenario_setups import attempt_specs, inside_lane, judge, longest_straight
 from arena.scenarios import Cell, Scenario, SuiteResult, cells_of, load_scenario, run_cells
 from controllers.race import RaceOutcome, RaceSpec
@@ -145,6 +145,10 @@ def test_short_real_attempts_of_each_new_kind_race_and_report_the_egos_place(tmp
     report = markdown_report(summary)
     assert "ego's place [95% CI]" in report and "start, the ego leads the field at the end" in report
     assert "| lapping-straight | oval | mcts-lqng | fixed-lqng | 0.85 | 2 | 1.00 [0.34, 1.00]" in report
+    summary["scenarios"]["lapping-straight"]["backmarker"] = "lane-follower"
+    publish(summary, tmp_path / "published", ["mcts-lqng", "fixed-lqng"], 1.0)
+    manifest = json.loads((tmp_path / "published" / "manifest.json").read_text())
+    assert [a["agent"] for a in manifest["agents"]] == ["fixed-lqng", "lane-follower", "mcts-lqng"]  # the slower kart
 
 
 def test_the_oracle_refuses_a_scenario_of_more_than_two_karts() -> None:
