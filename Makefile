@@ -56,7 +56,7 @@ results: setup  ## regenerate every published result (docs/results/, the README'
 	$(K) scenarios oracle --scenarios overtake-straight --opponents e2e,mcts-rl,fixed-lqng,fixed-rl --tracks oval,complex,brands-hatch --paces 0.95 --attempts 4 --seed 0 --lookahead 4.0 --base mcts-lqng --publish docs/results/scenarios/oracle --beside docs/results/scenarios/overtake/summary.json
 	$(K) scenarios run --scenarios overtake-straight --egos fixed-lqng,fixed-rl --opponents fixed-lqng,fixed-rl,e2e,mcts-lqng,mcts-rl --tracks oval,complex,brands-hatch --paces 0.95,0.97 --attempts 10 --seed 0 --publish docs/results/scenarios/overtake-fixed-line
 	$(K) scenarios run --scenarios defend-straight --egos mcts-lqng,mcts-rl,fixed-lqng,fixed-rl --opponents fixed-lqng,fixed-rl --tracks oval,complex,brands-hatch --attempts 30 --seed 0 --publish docs/results/scenarios/defend
-	$(K) scenarios run --scenarios side-by-side-corner,lapping-straight,start-4-karts --egos mcts-lqng,mcts-rl,fixed-lqng,fixed-rl --opponents fixed-lqng,fixed-rl,e2e --tracks oval,complex,brands-hatch --attempts 20 --seed 0 --workers 2 --publish docs/results/scenarios/situations
+	$(K) scenarios run --scenarios side-by-side-corner,lapping-straight,start-4-karts --egos mcts-lqng,mcts-rl,fixed-lqng,fixed-rl --opponents fixed-lqng,fixed-rl,e2e --tracks oval,complex,brands-hatch --attempts 20 --seed 0 --publish docs/results/scenarios/situations
 
 bench: setup
 	$(BIN)/python benchmarks/sim_step.py

@@ -27,7 +27,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from arena.scenario_setups import Attempt, attempt_specs, judge
-from arena.scenarios import TWO_KART_KINDS, Cell, CellFigures, Scenario
+from arena.scenario_spec import TWO_KART_KINDS, Cell, Scenario
+from arena.scenarios import CellFigures
 from arena.tournament import start_method
 from controllers.base import Controller, HighLevelPlanner, RaceContext
 from controllers.fixed_line import FixedLinePlanner

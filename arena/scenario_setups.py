@@ -16,19 +16,16 @@ a ``start`` attempt the opponent's copies as karts 1 to ``karts - 1``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from arena.scenario_spec import Cell, Kind, Scenario
 from controllers.race import Placement, RaceOutcome, RaceSpec, load_any_track
 from controllers.racing_line import optimise_racing_line
 from sim_core.params import DT, PAPER_KART
 from sim_core.state import PASS_HOLD_STEPS
 from sim_core.track import Track
 from sim_core.world import DEFAULT_START_LANES
-
-if TYPE_CHECKING:
-    from arena.scenarios import Cell, Kind, Scenario
 
 STRAIGHT_CURVATURE = 1.0 / 150.0  # [1/m] the centre line is straight where it turns more gently than this
 STRAIGHT_ENTRY = 20.0  # [m] "straight": the leader this far into the track's longest straight

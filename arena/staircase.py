@@ -16,7 +16,7 @@ from typing import Any
 
 from arena.intervals import Interval, bootstrap_mean
 from arena.scenario_setups import attempt_specs, judge
-from arena.scenarios import Cell, Scenario
+from arena.scenario_spec import Cell, Scenario
 from controllers.race import run_race
 from sim_core import state as st
 from sim_core.params import MIN_PACE

@@ -24,7 +24,7 @@ def _split(text: str) -> list[str]:
 @app.command("list")
 def list_scenarios() -> None:
     """The shipped scenarios (``scenarios/*.json``) and what each measures."""
-    from arena.scenarios import load_scenario, shipped_scenarios
+    from arena.scenario_spec import load_scenario, shipped_scenarios
 
     shown = table("scenarios", ["name", "kind", "place", "tracks", "paces", "description"], keys=["name"])
     for name in shipped_scenarios():
@@ -53,7 +53,8 @@ def run(
     """Race ATTEMPTS attempts of every cell (scenario, track, ego, opponent, pace): scenarios by shipped name or
     file path; an ego never meets itself. Prints each cell's success rate with its 95% interval, the time to pass,
     the ego's collisions at fault and illegal lane changes per attempt, and each ego's pass threshold r50."""
-    from arena.scenarios import SuiteResult, cells_of, load_scenario, run_cells
+    from arena.scenario_spec import load_scenario
+    from arena.scenarios import SuiteResult, cells_of, run_cells
 
     try:
         loaded = [load_scenario(name) for name in _split(scenarios)]
@@ -121,7 +122,8 @@ def oracle(
     each of its plans replaced by whichever of it and its held-lane variants ends furthest ahead when raced forward
     in the simulator against the opponent's own controller."""
     from arena.oracle import ORACLE, OracleSettings, check_two_karts, oracle_driver, run_oracle_cells
-    from arena.scenarios import Cell, SuiteResult, load_scenario
+    from arena.scenario_spec import Cell, load_scenario
+    from arena.scenarios import SuiteResult
     from controllers.registry import validate_agent
     from sim_core.params import MIN_PACE
 
@@ -219,7 +221,7 @@ def staircase_command(
 
 def load_scenario_or_exit(name: str) -> Any:
     """A scenario by name or path; exit code 2 naming the shipped ones when there is none."""
-    from arena.scenarios import load_scenario
+    from arena.scenario_spec import load_scenario
 
     try:
         return load_scenario(name)

@@ -17,7 +17,8 @@ from typing import Any
 from sqlalchemy import JSON, DateTime, String, select
 from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
 
-from arena.scenarios import RunStoppedError, Scenario, SuiteResult, cells_of, load_scenario, run_cells
+from arena.scenario_spec import Scenario, load_scenario
+from arena.scenarios import RunStoppedError, SuiteResult, cells_of, run_cells
 from server.db import RaceDatabase, utc_now
 
 log = logging.getLogger(__name__)

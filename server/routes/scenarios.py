@@ -12,7 +12,7 @@ from fastapi import APIRouter, HTTPException, status
 from fastapi.exceptions import RequestValidationError
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
-from arena.scenarios import load_scenario, shipped_scenarios
+from arena.scenario_spec import load_scenario, shipped_scenarios
 from controllers.registry import PACE_SEPARATOR, validate_agent
 from server.deps import API_KEY_RESPONSES, ApiKey, ScenarioRuns
 from server.limits import MAX_SEED

@@ -8,7 +8,7 @@ import pytest
 
 from arena.oracle import OraclePlanner, OracleSettings, oracle_driver
 from arena.scenario_setups import attempt_specs, judge
-from arena.scenarios import Cell, load_scenario
+from arena.scenario_spec import Cell, load_scenario
 from controllers.base import RaceContext
 from controllers.fixed_line import FixedLinePlanner
 from controllers.race import run_race

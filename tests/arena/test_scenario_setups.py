@@ -13,7 +13,8 @@ import pytest
 from arena.oracle import run_oracle_cells
 from arena.scenario_report import markdown_report, publish
 from arena.scenario_setups import attempt_specs, inside_lane, judge, longest_straight
-from arena.scenarios import Cell, Scenario, SuiteResult, cells_of, load_scenario, run_cells
+from arena.scenario_spec import Cell, Scenario, load_scenario
+from arena.scenarios import SuiteResult, cells_of, run_cells
 from controllers.race import RaceOutcome, RaceSpec
 from sim_core.track_io import get_track
 from sim_core.world import DEFAULT_START_LANES, KartResult, RaceResult

@@ -12,17 +12,8 @@ import pytest
 from arena.intervals import wilson
 from arena.scenario_report import beside_oracle, markdown_report
 from arena.scenario_setups import Attempt, attempt_specs, longest_straight, placements
-from arena.scenarios import (
-    Cell,
-    CellFigures,
-    Scenario,
-    SuiteResult,
-    cells_of,
-    load_scenario,
-    pass_thresholds,
-    run_cells,
-    shipped_scenarios,
-)
+from arena.scenario_spec import Cell, Scenario, load_scenario, shipped_scenarios
+from arena.scenarios import CellFigures, SuiteResult, cells_of, pass_thresholds, run_cells
 from sim_core.track_io import get_track
 
 

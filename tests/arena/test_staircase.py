@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from arena.scenarios import load_scenario
+from arena.scenario_spec import load_scenario
 from arena.staircase import pass_staircase, staircase
 
 
