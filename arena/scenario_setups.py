@@ -173,7 +173,7 @@ def _attempt_karts(
         ego_at, opponent_at = (follow, lead) if scenario.kind == "overtake" else (lead, follow)
         return (ego, opponent), (ego_at, opponent_at), None, lead
     if scenario.kind == "side-by-side":
-        pair = side_by_side(scenario, track, gap, min(cell.pace, 1.0), ego_inside=attempt % 2 == 0)
+        pair = side_by_side(scenario, track, gap, cell.pace, ego_inside=attempt % 2 == 0)
         return (ego, opponent), pair, None, max(pair, key=lambda p: p.progress)
     if scenario.kind == "lapping":
         rival_gap = float(draws.uniform(*scenario.rival_gap_m))
