@@ -11,12 +11,16 @@ from __future__ import annotations
 
 import json
 from collections.abc import Sequence
-from typing import Any
+from typing import Annotated, Any
 
+import typer
 from rich import box
 from rich.console import Console
 from rich.table import Table
 from rich.text import Text
+
+# the --json flag every command that prints a result takes
+JsonOption = Annotated[bool, typer.Option("--json", help="print one JSON object (the last line) instead of tables")]
 
 console = Console()
 

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Annotated, cast
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-from karting.output import add_row, console, error, print_json
+from karting.output import JsonOption, add_row, console, error, print_json
 from karting.output import table as make_table
 
 if TYPE_CHECKING:
@@ -26,7 +26,6 @@ if TYPE_CHECKING:
     from server.tournament_db import TournamentDatabase
 
 app = typer.Typer(help="Round-robin tournaments: run, statistics, reports.", no_args_is_help=True)
-JsonOption = Annotated[bool, typer.Option("--json", help="print one JSON object (the last line) instead of tables")]
 
 DbOption = Annotated[str, typer.Option(help="SQLite file or database URL (the server's: ./karting.db)")]
 

@@ -6,6 +6,9 @@
   (the paper trains its learned agents on two oval sizes).
 * ``train-hairpins``: a training circuit with tight corners both ways (ours: the RL agents met complex's
   hairpins untrained and stuck against the outside wall).
+* ``train-narrow-hairpins``: a 6 m wide training circuit with 180 deg hairpins of inside radius 2 and 1 m (ours:
+  every other track is 10 m wide, and the RL agents ran wide into the 6 m wide hairpin of the imported
+  ``brands-hatch`` and stopped against its wall).
 
 Run from the repo root: ``.venv/bin/python scripts/make_tracks.py [--spec-dir ../shared/spec/tracks]``.
 """
@@ -18,7 +21,7 @@ import math
 from pathlib import Path
 
 from sim_core.track import Checkpoint, Section
-from sim_core.track_builder import build_track, chain_track, hairpin_pieces, oval_pieces
+from sim_core.track_builder import build_track, chain_track, hairpin_pieces, narrow_hairpin_pieces, oval_pieces
 from sim_core.track_io import TRACKS_DIR, save_track
 
 DESCRIPTIONS = {
@@ -102,7 +105,16 @@ def main() -> None:
         description="Training circuit with a notch: corners of inside radius 5, 7 and 1 m, both ways (not in the "
         "paper's training set: its ovals have no corner under 10 m, complex has 1-5 m hairpins).",
     )
-    for track in (small, large, hairpins):
+    narrow = chain_track(
+        "train-narrow-hairpins",
+        narrow_hairpin_pieces(width=6.0),
+        width=6.0,
+        laps=1,
+        lane_change_limit=4,
+        description="Training circuit 6 m wide: 180 deg left hairpins of inside radius 2 and 1 m, each followed by a "
+        "right-left kink of inside radius 3 m (not in the paper's training set: every other track is 10 m wide).",
+    )
+    for track in (small, large, hairpins, narrow):
         save_track(track, TRACKS_DIR / f"{track.name}.json")
     print("wrote", sorted(p.name for p in TRACKS_DIR.glob("*.json")))
 

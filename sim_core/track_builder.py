@@ -301,3 +301,45 @@ def hairpin_pieces(
         + straight(bottom, 8)
         + corner(outer_radius, True)
     )
+
+
+def narrow_hairpin_pieces(
+    first_radius: float = 2.0, second_radius: float = 1.0, kink_radius: float = 3.0, width: float = 6.0
+) -> list[Straight | Curve]:
+    """A counter-clockwise circuit for a ``width`` [m] wide track with two 180 deg left hairpins of inside radii
+    ``first_radius`` and ``second_radius`` [m], each followed by a right-left 90 deg kink of inside radius
+    ``kink_radius`` (its reverse turns the other way). Straights are 10-11 m pieces; the last ones close it.
+
+    A hairpin's racing lane takes the inside (lane 1) for its first half and lane 2 on its exit; a kink's right
+    turn the last lane then the one beside it, its left turn lanes 1 and 2; straights leave the lane free.
+    """
+    half = width / 2.0
+
+    def hairpin(radius: float) -> list[Straight | Curve]:
+        return [Curve(radius, 45.0, True, lane) for lane in (1, 1, 2, 2)]
+
+    def corner(radius: float, left: bool) -> list[Straight | Curve]:
+        return [Curve(radius, 45.0, left, 1 if left else 4), Curve(radius, 45.0, left, 2 if left else 3)]
+
+    def straight(length: float, pieces: int) -> list[Straight | Curve]:
+        return [Straight(length / pieces) for _ in range(pieces)]
+
+    up, down, west, south = 40.0, 20.0, 20.0, 40.0
+    # sideways: the first hairpin, a kink and the west straight move the line west, the second hairpin and the
+    # other kink (each kink moves it the same distance) back east; along the track the kinks' moves cancel
+    east = 2 * (first_radius + half) + west - 2 * (second_radius + half)
+    north = down + south - up
+    return (
+        straight(up, 4)
+        + hairpin(first_radius)
+        + straight(down, 2)
+        + corner(kink_radius, False)
+        + straight(west, 2)
+        + corner(kink_radius, True)
+        + straight(south, 4)
+        + hairpin(second_radius)
+        + corner(kink_radius, False)
+        + straight(east, 2)
+        + corner(kink_radius, True)
+        + straight(north, 2)
+    )

@@ -175,6 +175,27 @@ def test_train_reward_weight_reaches_the_training_environment(monkeypatch, tmp_p
     assert bad.exit_code == 2 and "--reward-weight" in bad.output and "target_lane" in bad.output
 
 
+def test_train_tracks_choose_the_training_set(monkeypatch, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    import controllers.rl.train as training
+    from controllers.rl.config import TRAINING_TRACKS
+
+    seen = []
+
+    def fake_training(env, ppo, folder, **_):  # type: ignore[no-untyped-def]
+        seen.append(env.tracks)
+        return training.TrainResult(timesteps=0, wall_s=1.0, env_steps_per_s=0.0, out=folder)
+
+    monkeypatch.setattr(training, "train", fake_training)
+    args = ["train", "mcts-rl", "--out", str(tmp_path), "--steps", "1", "--json"]
+    assert runner.invoke(app, args).exit_code == 0
+    chosen = runner.invoke(app, [*args, "--tracks", "train-narrow-hairpins, train-oval-small-reversed"])
+    assert chosen.exit_code == 0, chosen.output
+    assert seen == [TRAINING_TRACKS, ("train-narrow-hairpins", "train-oval-small-reversed")]
+    bad = runner.invoke(app, [*args, "--tracks", "train-oval-small,no-such-track"], env=NARROW)
+    assert bad.exit_code == 2 and "--tracks" in bad.output and "no-such-track" in bad.output
+    assert len(seen) == 2  # nothing trained
+
+
 def test_a_team_race_scores_the_teams_as_the_originals_team_races() -> None:
     karts = ["--karts", "lane-follower,fixed-lqng,lane-follower,fixed-lqng", "--teams", "blue,red,blue,red"]
     done = runner.invoke(app, [*RACE[:3], *karts, "--laps", "1", "--json"], env=NARROW)

@@ -27,7 +27,15 @@ from sim_core.track_io import (
     track_to_dict,
 )
 
-BUILTINS = ("brands-hatch", "complex", "oval", "train-hairpins", "train-oval-large", "train-oval-small")
+BUILTINS = (
+    "brands-hatch",
+    "complex",
+    "oval",
+    "train-hairpins",
+    "train-narrow-hairpins",
+    "train-oval-large",
+    "train-oval-small",
+)
 ALL_NAMES = tuple(n for b in BUILTINS for n in (b, f"{b}-reversed"))
 CSV_HEADER = "# x_m,y_m,w_tr_right_m,w_tr_left_m"
 

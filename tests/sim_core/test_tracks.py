@@ -296,7 +296,20 @@ def test_training_ovals_exist_and_differ_in_size() -> None:
     assert radius == {"train-oval-small": {10.0}, "train-oval-large": {20.0}}
 
 
-@pytest.mark.parametrize("name", ALL_NAMES)
+def test_the_narrow_training_circuit_is_6_m_wide_with_180_degree_hairpins_both_ways() -> None:
+    tr = track("train-narrow-hairpins")
+    np.testing.assert_allclose(tr.lane_half_left + tr.lane_half_right, 6.0)
+    curves = [s for s in tr.sections if not s.is_straight]
+    turned = {r: sum(s.angle_deg for s in curves if s.inside_radius == r and s.left_turn) for r in (1.0, 2.0)}
+    assert turned == {1.0: 180.0, 2.0: 180.0}
+    assert any(not s.left_turn for s in curves)  # the kinks turn right
+    for lane, offset in enumerate(tr.lane_offsets(0), start=1):  # four lanes across the 6 m, inside the walls
+        assert tr.lane_id(0, float(offset)) == lane and abs(offset) < 3.0 - 0.3
+    reverse = track("train-narrow-hairpins-reversed")
+    assert sum(s.angle_deg for s in reverse.sections if not s.is_straight and not s.left_turn) >= 360.0
+
+
+@pytest.mark.parametrize("name", [*ALL_NAMES, "train-narrow-hairpins", "train-narrow-hairpins-reversed"])
 def test_track_is_closed_and_continuous(name: str) -> None:
     tr = track(name)
     for poly in (tr.centre_xy, tr.left_wall, tr.right_wall):
@@ -308,7 +321,7 @@ def test_track_is_closed_and_continuous(name: str) -> None:
     assert np.all(np.diff(tr.checkpoint_s) > 0) and 0 <= tr.checkpoint_s[0] < tr.checkpoint_s[-1] < tr.length
 
 
-@pytest.mark.parametrize("name", BUILTINS)
+@pytest.mark.parametrize("name", [*BUILTINS, "train-narrow-hairpins"])
 def test_walls_do_not_cross(name: str) -> None:
     tr = track(name)
     assert segment_crossings(tr.left_wall, tr.left_wall, same=True) == 0
