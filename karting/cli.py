@@ -89,6 +89,53 @@ def import_track(
 
 
 @app.command()
+def solo(
+    agents: Annotated[str, typer.Option(help="registered agents, comma separated")] = "mcts-rl,fixed-rl,e2e",
+    tracks: Annotated[
+        str, typer.Option(help="tracks, comma separated: built-in names or track JSON paths")
+    ] = "oval,complex,brands-hatch",
+    races: Annotated[int, typer.Option(min=1, help="races per agent and track (seeds SEED, SEED + 1, ...)")] = 1,
+    seed: Annotated[int, typer.Option()] = 0,
+    conditions: Annotated[str, typer.Option(help="race conditions: paper, varied, ...")] = "paper",
+    workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per core)")] = None,
+    as_json: JsonOption = False,
+) -> None:
+    """Race each agent alone on each track: its best lap, the mean of its laps after the first, and its wall hits
+    (what a change to its driving must not worsen)."""
+    from arena.solo import run_solo  # loaded on use (see the module docstring)
+    from controllers.race import load_any_track
+    from controllers.registry import validate_agent
+    from sim_core.conditions import condition_set
+
+    names = [n.strip() for n in agents.split(",") if n.strip()]
+    track_names = [t.strip() for t in tracks.split(",") if t.strip()]
+    try:
+        for name in names:
+            validate_agent(name)
+        for track_name in track_names:
+            load_any_track(track_name)
+        condition_set(conditions)
+        figures = run_solo(names, track_names, races, seed, conditions, workers)
+    except (KeyError, ValueError) as exc:
+        error(str(exc.args[0]) if isinstance(exc, KeyError) else str(exc))
+        raise typer.Exit(2) from None
+    if as_json:
+        print_json({"solo": [f.to_json() for f in figures]})
+        return
+    shown = table(
+        f"alone, {races} race(s) each, {conditions} conditions",
+        ["agent", "track", "finished", "best lap [s]", "mean flying lap [s]", "wall hits / race"],
+        keys=["agent", "track"],
+        numeric=["finished", "best lap [s]", "mean flying lap [s]", "wall hits / race"],
+    )
+    for f in figures:
+        best = "-" if f.best_lap is None else f"{f.best_lap:.2f}"
+        mean = "-" if f.mean_flying_lap is None else f"{f.mean_flying_lap:.2f}"
+        add_row(shown, f.agent, f.track, f"{f.finished}/{f.races}", best, mean, f"{f.wall_hits_per_race:.1f}")
+    console.print(shown)
+
+
+@app.command()
 def race(
     track: Annotated[str, typer.Option(help="built-in track name, or a path to a track JSON")] = "oval",
     karts: Annotated[

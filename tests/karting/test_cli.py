@@ -211,3 +211,15 @@ def test_a_team_race_scores_the_teams_as_the_originals_team_races() -> None:
     assert f"teams: {team_of[order[0]]} won" in shown.output
     refused = runner.invoke(app, [*RACE, "--teams", "blue"], env=NARROW)
     assert refused.exit_code == 2 and "need one team for each of the 2 karts" in refused.output
+
+
+def test_solo_races_each_agent_alone_and_refuses_what_it_does_not_know() -> None:
+    args = ["solo", "--agents", "lane-follower", "--tracks", "train-oval-small", "--workers", "1"]
+    done = runner.invoke(app, [*args, "--json"])
+    assert done.exit_code == 0, done.output
+    (figures,) = json.loads(done.output.strip().splitlines()[-1])["solo"]
+    assert (figures["agent"], figures["track"], figures["finished"]) == ("lane-follower", "train-oval-small", 1)
+    assert figures["best_lap"] > 0 and figures["wall_hits"] == 0
+    for bad, named in (("--agents", "nope"), ("--tracks", "nope"), ("--conditions", "nope")):
+        refused = runner.invoke(app, [*args, bad, named], env=NARROW)
+        assert refused.exit_code == 2 and "'nope'" in refused.output
