@@ -30,6 +30,7 @@ from sim_core.track_io import (
 BUILTINS = (
     "brands-hatch",
     "complex",
+    "norisring",
     "oval",
     "train-hairpins",
     "train-narrow-hairpins",
@@ -71,7 +72,7 @@ def test_get_track_unknown_name() -> None:
 
 # --------------------------------------------------------------------------- JSON round trip
 # imported circuits: their centre line does not follow from the sections, so their files carry it
-IMPORTED = {"brands-hatch", "brands-hatch-reversed"}
+IMPORTED = {"brands-hatch", "brands-hatch-reversed", "norisring", "norisring-reversed"}
 
 
 @pytest.mark.parametrize("name", ALL_NAMES)
