@@ -52,6 +52,7 @@ results: setup  ## regenerate every published result (docs/results/, the README'
 	$(K) tournament run --id mcts-rl-fixed-rl-vp --agents mcts-rl,fixed-rl --tracks oval,complex --races-per-pair 200 --seed 0 --kart paper --conditions varied-pace --db $(RESULTS_DB)
 	$(K) tournament publish mcts-rl-fixed-rl-vp --out docs/results/varied-pace/mcts-rl-fixed-rl-vp --no-readme --db $(RESULTS_DB)
 	$(K) reproduce field --races 40 --seed 0
+	$(K) solo --agents mcts-rl,fixed-rl,e2e,mcts-lqng,fixed-lqng --tracks oval,complex,brands-hatch,norisring --races 1 --seed 0 --conditions paper --publish docs/results/solo
 	$(K) scenarios run --scenarios overtake-straight --egos mcts-lqng,mcts-rl --opponents fixed-lqng,fixed-rl,e2e,mcts-lqng,mcts-rl --tracks oval,complex,brands-hatch --paces 0.95,0.97 --attempts 30 --seed 0 --publish docs/results/scenarios/overtake
 	$(K) scenarios oracle --scenarios overtake-straight --opponents e2e,mcts-rl,fixed-lqng,fixed-rl --tracks oval,complex,brands-hatch --paces 0.95 --attempts 4 --seed 0 --lookahead 4.0 --base mcts-lqng --publish docs/results/scenarios/oracle --beside docs/results/scenarios/overtake/summary.json
 	$(K) scenarios run --scenarios overtake-straight --egos fixed-lqng,fixed-rl --opponents fixed-lqng,fixed-rl,e2e,mcts-lqng,mcts-rl --tracks oval,complex,brands-hatch --paces 0.95,0.97 --attempts 10 --seed 0 --publish docs/results/scenarios/overtake-fixed-line

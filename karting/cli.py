@@ -98,11 +98,16 @@ def solo(
     seed: Annotated[int, typer.Option()] = 0,
     conditions: Annotated[str, typer.Option(help="race conditions: paper, varied, ...")] = "paper",
     workers: Annotated[int | None, typer.Option(min=1, help="worker processes (default: one per core)")] = None,
+    publish: Annotated[
+        Path | None, typer.Option(help="write README.md, solo.json and manifest.json into this folder")
+    ] = None,
     as_json: JsonOption = False,
 ) -> None:
     """Race each agent alone on each track: its best lap, the mean of its laps after the first, and its wall hits
     (what a change to its driving must not worsen)."""
-    from arena.solo import run_solo  # loaded on use (see the module docstring)
+    import time
+
+    from arena.solo import publish_solo, run_solo  # loaded on use (see the module docstring)
     from controllers.race import load_any_track
     from controllers.registry import validate_agent
     from sim_core.conditions import condition_set
@@ -115,24 +120,31 @@ def solo(
         for track_name in track_names:
             load_any_track(track_name)
         condition_set(conditions)
+        started = time.perf_counter()
         figures = run_solo(names, track_names, races, seed, conditions, workers)
     except (KeyError, ValueError) as exc:
         error(str(exc.args[0]) if isinstance(exc, KeyError) else str(exc))
         raise typer.Exit(2) from None
+    if publish is not None:
+        spec = {"tracks": track_names, "races": races, "seed": seed, "conditions": conditions}
+        options = f"--agents {agents} --tracks {tracks} --races {races} --seed {seed} --conditions {conditions}"
+        command = f"karting solo {options} --publish {publish}"
+        publish_solo(publish, figures, spec, command, time.perf_counter() - started)
     if as_json:
         print_json({"solo": [f.to_json() for f in figures]})
         return
     shown = table(
         f"alone, {races} race(s) each, {conditions} conditions",
-        ["agent", "track", "finished", "best lap [s]", "mean flying lap [s]", "wall hits / race"],
+        ["agent", "track", "finished", "best\n[s]", "flying\n[s]", "walls\n/race"],
         keys=["agent", "track"],
-        numeric=["finished", "best lap [s]", "mean flying lap [s]", "wall hits / race"],
+        numeric=["finished", "best\n[s]", "flying\n[s]", "walls\n/race"],
     )
     for f in figures:
         best = "-" if f.best_lap is None else f"{f.best_lap:.2f}"
         mean = "-" if f.mean_flying_lap is None else f"{f.mean_flying_lap:.2f}"
         add_row(shown, f.agent, f.track, f"{f.finished}/{f.races}", best, mean, f"{f.wall_hits_per_race:.1f}")
     console.print(shown)
+    console.print("flying: the mean of the laps after the standing start; walls: wall hits per race", style="dim")
 
 
 @app.command()

@@ -14,7 +14,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
-STUDY = re.compile(r"`(karting (?:reproduce|scenarios run|scenarios oracle)[^`]*)`")
+STUDY = re.compile(r"`(karting (?:reproduce|scenarios run|scenarios oracle|solo)[^`]*)`")
 TOURNAMENT = re.compile(r"^\s+(karting tournament run [^\n]*)$", re.MULTILINE)
 
 

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import pytest
 
 from arena.race import FinishedRace, RaceJob, run_jobs
-from arena.solo import SOLO_START_LANE, SOLO_TIME_LIMIT, solo_figures, solo_jobs
+from arena.solo import SOLO_START_LANE, SOLO_TIME_LIMIT, publish_solo, solo_figures, solo_jobs
 from controllers.race import RaceSpec, run_race
 from sim_core.world import KartResult, RaceResult
 
@@ -48,3 +51,15 @@ def test_a_solo_race_gives_the_referees_own_figures() -> None:
     assert figures.best_lap == pytest.approx(min(alone.lap_times[0]), abs=1e-3)
     assert figures.wall_hits == alone.result.karts[0].wall_hits
     assert figures.mean_flying_lap is None  # a one-lap track has no lap after the first
+
+
+def test_published_solo_laps_name_their_command_agents_and_every_figure(tmp_path: Path) -> None:
+    jobs = solo_jobs(["lane-follower"], ["oval"])
+    (figures,) = solo_figures([_finished(jobs[0], (21.0, 18.25, 19.0), 2)])
+    command = "karting solo --agents lane-follower --tracks oval --publish OUT"
+    publish_solo(tmp_path, [figures], {"tracks": ["oval"], "races": 1}, command, 90.0)
+    readme = (tmp_path / "README.md").read_text()
+    assert f"`{command}`" in readme and "| lane-follower | oval | 1/1 | 18.25 | 18.62 | 2.0 |" in readme
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    assert manifest["kind"] == "solo" and [a["agent"] for a in manifest["agents"]] == ["lane-follower"]
+    assert json.loads((tmp_path / "solo.json").read_text())["solo"] == [figures.to_json()]
