@@ -54,8 +54,8 @@ def test_every_other_published_tournament_is_of_the_current_agents_and_condition
 def test_every_published_study_is_of_the_current_agents(kind: str) -> None:
     """A field study (``karting reproduce field``), a scenario suite (``karting scenarios run|oracle
     --publish``) or the solo laps (``karting solo --publish``) records each agent with every parameter and its
-    weights: each must describe the same agent today. (A field study's manifest names its condition set without the set's values, so a changed set is not
-    caught here.)"""
+    weights: each must describe the same agent today. (A field study's manifest names its condition set without
+    the set's values, so a changed set is not caught here.)"""
     folders = [m.parent for m in sorted(RESULTS.rglob("manifest.json")) if json.loads(m.read_text())["kind"] == kind]
     assert folders, f"no published {kind} result found: the check would pass on nothing"
     problems = []
