@@ -16,9 +16,9 @@ from typing import Any
 
 from arena.field import FieldFigures, FieldSpec, field_figures, row_effect, slot_wins
 from arena.field_compare import PairedChange, baseline_section, change_json, field_races, paired_changes
+from arena.field_places import FaultPlace, fault_places, hotspot_lines, hotspots
 from arena.intervals import Interval
 from arena.manifest import build_manifest, describe_agent, source_commit, time_limit_of
-from arena.race import FinishedRace
 from arena.ratings import ratings
 from arena.records import PER_STEP, RaceFigures
 from arena.reproduce import PAPER_AGENTS
@@ -44,16 +44,26 @@ def field_spec(
 
 
 def run_field(
-    spec: FieldSpec, workers: int | None = None, on_race: Callable[[int, int], None] | None = None
+    spec: FieldSpec,
+    workers: int | None = None,
+    on_race: Callable[[int, int], None] | None = None,
+    places: list[FaultPlace] | None = None,
 ) -> list[RaceFigures]:
-    """Every race of ``spec`` (worker processes), in schedule order; ``on_race(done, total)`` after each."""
+    """Every race of ``spec`` (worker processes), in schedule order; ``on_race(done, total)`` after each. With
+    ``places``, the races are recorded and every collision at fault's place is appended to it, in schedule order
+    (:func:`arena.field_places.fault_places`; each replay is dropped once read)."""
     source_commit()  # the code the races run with, before the study writes anything (the manifest's commit)
-    finished: dict[int, FinishedRace] = {}
-    for race in race_stream(spec.jobs(), workers=workers):
-        finished[race.job.index] = race
+    finished: dict[int, RaceFigures] = {}
+    found: dict[int, list[FaultPlace]] = {}
+    for race in race_stream(spec.jobs(), workers=workers, record=places is not None):
+        finished[race.job.index] = race.figures()
+        if places is not None:
+            found[race.job.index] = fault_places(race)
         if on_race is not None:
             on_race(len(finished), spec.total)
-    return [finished[i].figures() for i in sorted(finished)]
+    if places is not None:
+        places.extend(place for i in sorted(found) for place in found[i])
+    return [finished[i] for i in sorted(finished)]
 
 
 def _interval(value: float, ci: Interval | None, digits: int = 2) -> str:
@@ -77,9 +87,11 @@ def field_findings(
     wall_s: float,
     baseline: tuple[Path, Sequence[PairedChange]] | None = None,
     out: Path = DEFAULT_FIELD_OUT,
+    places: Sequence[FaultPlace] | None = None,
 ) -> str:
     """The study's README (``baseline``: the study it was raced against, and the paired changes; ``out``: where it
-    is written, named in the command that regenerates it unless the default)."""
+    is written, named in the command that regenerates it unless the default; ``places``: where the collisions at
+    fault happened)."""
     agents = "" if spec.agents == tuple(PAPER_AGENTS) else f" --agents {','.join(spec.agents)}"
     if baseline is not None:
         agents += f" --baseline {baseline[0]}"
@@ -112,6 +124,8 @@ def field_findings(
     ]
     for track, subset in _per_track(spec, races).items():
         lines += _track_section(track, subset)
+    if places is not None:
+        lines += hotspot_lines([hotspots(track, places) for track in spec.tracks])
     lines += _slot_section(races, spec.field_size)
     lines += _row_section(races)
     if baseline is not None:
@@ -226,18 +240,29 @@ def field_json(spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float) -> 
 
 
 def write_field(
-    out: Path, spec: FieldSpec, races: Sequence[RaceFigures], wall_s: float, baseline: Path | None = None
+    out: Path,
+    spec: FieldSpec,
+    races: Sequence[RaceFigures],
+    wall_s: float,
+    baseline: Path | None = None,
+    places: Sequence[FaultPlace] | None = None,
 ) -> None:
     """``OUT/README.md``, ``OUT/field.json`` and ``OUT/manifest.json``; with ``baseline`` (a study of the same
-    schedule: its folder or ``field.json``) each agent's collisions paired race by race against it too."""
+    schedule: its folder or ``field.json``) each agent's collisions paired race by race against it too; with
+    ``places``, where the collisions at fault happened."""
     # the manifest first: the files written here are tracked, and would otherwise count as changed code
     manifest = build_manifest("field", [describe_agent(a) for a in spec.agents], "paper", spec.to_json())
     compared = None if baseline is None else (baseline, paired_changes(field_races(baseline), races))
     data = field_json(spec, races, wall_s)
     if compared is not None:
         data["baseline"] = {"study": str(baseline), "changes": [change_json(c) for c in compared[1]]}
+    if places is not None:
+        data["collision_places"] = {
+            "hotspots": [hotspots(track, places).to_json() for track in spec.tracks],
+            "faults": [{"track": p.track, "place": p.to_json()} for p in places],
+        }
     out.mkdir(parents=True, exist_ok=True)
-    (out / "README.md").write_text(field_findings(spec, races, wall_s, compared, out))
+    (out / "README.md").write_text(field_findings(spec, races, wall_s, compared, out, places))
     (out / "field.json").write_text(json.dumps(data, indent=1) + "\n")
     (out / "manifest.json").write_text(json.dumps(manifest.to_json(), indent=1) + "\n")
 
@@ -245,7 +270,8 @@ def write_field(
 def reproduce_field(out: Path, spec: FieldSpec, workers: int | None = None) -> float:
     """Run ``spec`` and write it into ``out``; returns the wall time [s]."""
     started = time.perf_counter()
-    races = run_field(spec, workers)
+    places: list[FaultPlace] = []
+    races = run_field(spec, workers, places=places)
     wall = time.perf_counter() - started
-    write_field(out, spec, races, wall)
+    write_field(out, spec, races, wall, places=places)
     return wall

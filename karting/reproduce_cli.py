@@ -101,6 +101,7 @@ def field(
     safety per kart-race and rating into OUT/ (README.md, field.json, manifest); with BASELINE, each agent's
     collisions race by race against the agent in its slots there."""
     from arena.field_compare import field_races
+    from arena.field_places import FaultPlace
     from arena.reproduce import PAPER_AGENTS
     from arena.reproduce_field import field_spec, run_field, write_field
 
@@ -113,13 +114,14 @@ def field(
         raise typer.Exit(2) from None
     console.print(f"field: {spec.total} races of {spec.field_size} karts")
     started = time.perf_counter()
-    done = run_field(spec, workers, on_race=lambda n, total: console.print(f"{n}/{total}", end="\r"))
+    places: list[FaultPlace] = []
+    done = run_field(spec, workers, on_race=lambda n, total: console.print(f"{n}/{total}", end="\r"), places=places)
     wall = time.perf_counter() - started
     try:
-        write_field(out, spec, done, wall, baseline)
+        write_field(out, spec, done, wall, baseline, places)
     except ValueError as exc:  # a baseline of another schedule: the study is still written, without it
         error(f"{exc}; written without the baseline")
-        write_field(out, spec, done, wall)
+        write_field(out, spec, done, wall, places=places)
     console.print(f"wrote {out}/ ({wall / 60:.1f} min)")
 
 

@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from arena.field import FieldSpec, field_figures, places, row_effect, slot_wins
+from arena.field_places import FaultPlace
 from arena.records import CHECKPOINT, PER_STEP, KartFigures, RaceFigures
 from arena.reproduce_field import field_spec, run_field, write_field
 from sim_core.conditions import condition_set
@@ -121,11 +122,15 @@ def test_the_study_races_the_paper_agents_unless_told_others() -> None:
 
 def test_a_tiny_study_runs_in_worker_processes_and_is_written_out(tmp_path: Path) -> None:
     spec = FieldSpec(("lane-follower", "fixed-lqng"), ("oval",), field_size=5, races_per_track=2, time_limit=6.0)
-    races = run_field(spec.validate(), workers=2)
+    places: list[FaultPlace] = []
+    races = run_field(spec.validate(), workers=2, places=places)
     assert [len(r.karts) for r in races] == [5, 5]
     assert [r.agents for r in races] == [spec.lineup(0), spec.lineup(1)]
-    write_field(tmp_path, spec, races, 1.0)
+    assert len(places) == sum(k.collisions_at_fault for r in races for k in r.karts)
+    write_field(tmp_path, spec, races, 1.0, places=places)
     data = json.loads((tmp_path / "field.json").read_text())
+    assert [h["track"] for h in data["collision_places"]["hotspots"]] == ["oval"]
+    assert "## Where the collisions at fault happen" in (tmp_path / "README.md").read_text()
     assert set(data["tracks"]) == {"oval", "combined"} and len(data["races"]) == 2
     assert set(data["tracks"]["oval"]["agents"]) == {"lane-follower", "fixed-lqng"}
     manifest = json.loads((tmp_path / "manifest.json").read_text())
