@@ -89,8 +89,9 @@ def solo_figures(finished: Sequence[FinishedRace]) -> list[SoloFigures]:
         groups.setdefault((race.job.agents[0], race.job.track), []).append(race)
     figures = []
     for (agent, track), group in groups.items():
-        laps = [lap for race in group for lap in race.lap_times[0]] if group[0].lap_times else []
-        flying = [lap for race in group for lap in race.lap_times[0][1:]] if group[0].lap_times else []
+        by_race = [race.lap_times[0] if race.lap_times else () for race in group]
+        laps = [lap for race_laps in by_race for lap in race_laps]
+        flying = [lap for race_laps in by_race for lap in race_laps[1:]]
         figures.append(
             SoloFigures(
                 agent=agent,

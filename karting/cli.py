@@ -10,6 +10,7 @@ blamed on a kart; a controller's own errors and missed deadlines are "controller
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, cast
 
@@ -105,8 +106,6 @@ def solo(
 ) -> None:
     """Race each agent alone on each track: its best lap, the mean of its laps after the first, and its wall hits
     (what a change to its driving must not worsen)."""
-    import time
-
     from arena.solo import publish_solo, run_solo  # loaded on use (see the module docstring)
     from controllers.race import load_any_track
     from controllers.registry import validate_agent
